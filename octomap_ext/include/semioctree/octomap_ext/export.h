@@ -1,0 +1,30 @@
+// Exports of a SemiOcTree for the OctoMap / point-cloud world:
+//  - ColorOcTree: every labelled octant as an occupied node in its class colour
+//    (opens in stock octovis; unknown space is left out);
+//  - OcTree occupancy: occupied → occupied; empty/out/door/window/scan/nbv →
+//    free; occluded/unknown → unknown (absent), for .bt files;
+//  - PLY of octant centres (x y z, red green blue, label, level, size).
+// Octants keep their size: a coarse octant becomes one node at its depth.
+#pragma once
+
+#include <octomap/ColorOcTree.h>
+#include <octomap/OcTree.h>
+
+#include <memory>
+#include <string>
+
+#include "semioctree/octomap_ext/semioctree.h"
+
+namespace semioctree {
+
+std::unique_ptr<octomap::ColorOcTree> to_color_octree(const SemiOcTree& tree);
+std::unique_ptr<octomap::OcTree> to_occupancy_octree(const SemiOcTree& tree);
+
+struct PlyOptions {
+  bool include_unknown = false;  // unknown octants are skipped by default
+};
+// Binary little-endian PLY; written atomically. Returns the vertex count.
+std::size_t write_octant_ply(const SemiOcTree& tree, const std::string& path,
+                             const PlyOptions& options = {});
+
+}  // namespace semioctree

@@ -1,0 +1,47 @@
+// Reading and writing OctoMap files safely: every file is validated before
+// OctoMap's readers see it, and every file is written to a temporary name and
+// renamed, so an interrupted run never leaves a half-written file behind.
+#pragma once
+
+#include <octomap/AbstractOcTree.h>
+#include <octomap/OcTree.h>
+
+#include <functional>
+#include <memory>
+#include <ostream>
+#include <stdexcept>
+#include <string>
+
+#include "semioctree/octomap_ext/semioctree.h"
+
+namespace semioctree {
+
+// An I/O or format problem, with the file's path in the message.
+class FileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct TreeFile {
+  std::unique_ptr<octomap::AbstractOcTree> tree;
+  bool binary = false;   // a .bt occupancy file (always read as octomap::OcTree)
+  std::string type;      // "OcTree", "ColorOcTree", "SemiOcTree"
+  std::size_t header_size = 0;
+};
+
+// Reads a .ot (OcTree, ColorOcTree, SemiOcTree) or .bt file, recognised by its
+// first line, not its name. Throws FileError naming the file on a missing,
+// truncated, corrupted or unsupported file.
+TreeFile read_tree_file(const std::string& path);
+// Same, and requires a SemiOcTree.
+std::unique_ptr<SemiOcTree> read_semioctree_file(const std::string& path);
+
+// Writes via `path + ".tmp-<pid>"` and rename(); throws FileError on failure.
+void write_file_atomically(const std::string& path,
+                           const std::function<void(std::ostream&)>& write);
+// .ot of any tree type (the tree is not modified: no pruning).
+void write_tree_file(const octomap::AbstractOcTree& tree, const std::string& path);
+// .bt occupancy file (OctoMap's writeBinaryConst: the tree is not pruned).
+void write_binary_file(const octomap::OcTree& tree, const std::string& path);
+
+}  // namespace semioctree

@@ -1,0 +1,211 @@
+// SemiOcTree: a world-aligned grid of coarse voxels of side L = r·2^k, each the
+// root of an octree refined down to the leaf size r only where needed.
+//
+// It is one OctoMap tree (OccupancyOcTreeBase<SemiOcTreeNode>) whose nodes at
+// depth 16−k are the coarse voxels. Those nodes are never pruned away and are
+// indexed by a hash map, so a coarse voxel is reached in O(1) instead of a
+// 16-level descent. The whole structure reads and writes as one `.ot` file of
+// type "SemiOcTree" through OctoMap's AbstractOcTree factory.
+#pragma once
+
+#include <octomap/OccupancyOcTreeBase.h>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "semioctree/octomap_ext/coarse_table.h"
+#include "semioctree/octomap_ext/labels.h"
+#include "semioctree/octomap_ext/semioctree_node.h"
+
+namespace semioctree {
+
+// A point in world coordinates (metres), in double precision: OctoMap's point3d
+// is float, which puts points on cell boundaries into the wrong cell.
+struct Point3 {
+  double x = 0, y = 0, z = 0;
+  Point3() = default;
+  Point3(double x_, double y_, double z_) : x(x_), y(y_), z(z_) {}
+  Point3(const octomap::point3d& p) : x(p.x()), y(p.y()), z(p.z()) {}  // NOLINT
+  double operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
+};
+
+// Integer index of a coarse voxel: voxel (i, j, l) is the cube
+// [iL, (i+1)L) × [jL, (j+1)L) × [lL, (l+1)L).
+struct CoarseIndex {
+  int x = 0, y = 0, z = 0;
+  bool operator==(const CoarseIndex& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+
+// One leaf of the octant structure (an octant that is not split further).
+struct Octant {
+  octomap::OcTreeKey key;  // key of the octant's minimum corner cell
+  unsigned level = 0;      // 0 = coarse voxel, coarse_level() = leaf size
+  double size = 0;         // side length in metres
+  Point3 center;
+  const SemiOcTreeNode* node = nullptr;  // null only for space outside any coarse voxel
+  Label label() const { return node ? node->label() : Label::kUnknown; }
+};
+
+// Octants per level and label, and volume per label.
+struct OctantStatistics {
+  unsigned coarse_level = 0;
+  double leaf_size = 0;
+  std::vector<std::array<std::uint64_t, kLabelCount>> count;  // [level][label]
+  std::array<double, kLabelCount> volume{};                    // m³ per label
+  std::uint64_t coarse_voxels = 0;
+
+  std::uint64_t total() const;
+  std::uint64_t at_level(unsigned level) const;
+  std::uint64_t with_label(Label l) const;
+  double total_volume() const;
+};
+
+// Why a segment traversal ended.
+enum class TraversalEnd {
+  kReachedEnd,   // the octant containing the end point was visited
+  kStopped,      // the visitor asked to stop
+  kOutOfRange,   // an end point lies outside OctoMap's key range (nothing visited)
+};
+
+// An octant crossed by a segment, handed to the traversal visitor.
+struct RayStep {
+  octomap::OcTreeKey key;  // minimum-corner key of the octant
+  unsigned level = 0;      // 0 = coarse voxel ... coarse_level() = leaf
+  const SemiOcTreeNode* node = nullptr;  // null: no coarse voxel there (unknown space)
+  double t_enter = 0;      // segment parameter in [0, 1] where the octant is entered
+  Label label() const { return node ? node->label() : Label::kUnknown; }
+};
+
+class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
+ public:
+  static constexpr unsigned kTreeDepth = 16;
+  static constexpr unsigned kMaxCoarseLevel = 12;
+
+  // Leaf size r and coarse size L; L must be r·2^k for an integer 0 ≤ k ≤ 12,
+  // else std::invalid_argument with a message saying so.
+  SemiOcTree(double leaf_size, double coarse_size);
+  // A tree with k = 0 (coarse voxel = leaf). Needed by OctoMap's factory.
+  explicit SemiOcTree(double leaf_size);
+  ~SemiOcTree() override = default;
+
+  // k such that coarse = leaf·2^k; throws std::invalid_argument otherwise.
+  static unsigned coarse_level_for(double leaf_size, double coarse_size);
+
+  SemiOcTree* create() const override { return new SemiOcTree(resolution); }
+  std::string getTreeType() const override { return "SemiOcTree"; }
+
+  double leaf_size() const { return resolution; }
+  double coarse_size() const { return resolution * double(1u << coarse_level_); }
+  unsigned coarse_level() const { return coarse_level_; }
+  unsigned coarse_depth() const { return kTreeDepth - coarse_level_; }
+  double octant_size(unsigned level) const {
+    return resolution * double(1u << (coarse_level_ - level));
+  }
+
+  // --- coarse grid ------------------------------------------------------------
+  CoarseIndex coarse_index(const octomap::OcTreeKey& key) const;
+  // False when the point is outside OctoMap's key range.
+  bool coarse_index_of(const Point3& p, CoarseIndex& out) const;
+  octomap::OcTreeKey coarse_key(const CoarseIndex& c) const;  // min-corner key
+  Point3 coarse_min_corner(const CoarseIndex& c) const;
+  SemiOcTreeNode* find_coarse(const CoarseIndex& c) const;
+  // Finds or creates the coarse voxel; a new one gets `label` (default unknown).
+  SemiOcTreeNode* create_coarse(const CoarseIndex& c, Label label = Label::kUnknown);
+  std::size_t coarse_count() const { return coarse_.size(); }
+  // Calls f(CoarseIndex, SemiOcTreeNode*) for every coarse voxel, in key order.
+  template <class F>
+  void for_each_coarse(F&& f) const;
+
+  // --- octants ----------------------------------------------------------------
+  bool key_of(const Point3& p, octomap::OcTreeKey& key) const;
+  // The leaf octant containing the leaf cell `key`; nullopt when no coarse voxel.
+  std::optional<Octant> find_octant(const octomap::OcTreeKey& key) const;
+  std::optional<Octant> find_octant(const Point3& p) const;
+  // The node of the octant at `level` containing `key`, creating the coarse voxel
+  // and splitting octants on the way as needed.
+  SemiOcTreeNode* touch_octant(const octomap::OcTreeKey& key, unsigned level);
+  // Splits the leaf octant at `level` containing `key` into its 8 children, which
+  // inherit its label. Throws std::logic_error at the leaf level.
+  void split(const octomap::OcTreeKey& key, unsigned level);
+  // Makes the octant at `level` containing `key` a leaf with this label (any
+  // children are removed). Creates the coarse voxel and splits parents as needed.
+  SemiOcTreeNode* set_label(const octomap::OcTreeKey& key, unsigned level, Label label);
+  // Occupancy log-odds stored with each label (OctoMap readers see these).
+  float log_odds_for(Label label) const;
+
+  Octant make_octant(const octomap::OcTreeKey& key, unsigned level,
+                     const SemiOcTreeNode* node) const;
+  // Calls f(const Octant&) for every leaf octant, in OctoMap's depth-first order.
+  template <class F>
+  void for_each_octant(F&& f) const;
+  OctantStatistics statistics() const;
+  // Memory of nodes plus the coarse index, in bytes.
+  std::size_t memory_bytes() const;
+
+  // Merges 8 sibling octants into their parent only when they carry the same
+  // label (and value); coarse voxels are never merged away.
+  void prune() override;
+  bool isNodeCollapsible(const SemiOcTreeNode* node) const override;
+  void clear() override;
+  // Re-allocates all nodes in depth-first order, so that each coarse voxel's
+  // octree sits together in memory: traversal after many edits is then
+  // cache-friendly (measured ~1.5x faster on a room map). Labels are unchanged.
+  void compact();
+
+  // --- ray traversal ------------------------------------------------------------
+  // Visits, in order along the segment a→b, every octant the segment passes
+  // through, each once and at its own size: an unsplit coarse voxel is one step.
+  // Cells are half-open, [i r, (i+1) r), so each point of the segment lies in
+  // exactly one cell; the first octant holds a, the last holds b. The visitor is
+  // `bool(const RayStep&)`; returning false stops the traversal.
+  template <class Visitor>
+  TraversalEnd traverse(const Point3& a, const Point3& b, Visitor&& visit) const;
+
+  // --- file format ------------------------------------------------------------
+  // .ot payload: a small header (magic, coarse level, exact resolution, node
+  // count, byte count, FNV-1a hash) and OctoMap's node stream. readData throws
+  // FileFormatError on anything malformed and leaves the tree empty.
+  std::istream& readData(std::istream& s) override;
+  std::ostream& writeData(std::ostream& s) const override;
+
+ protected:
+  // Registers the type with AbstractOcTree so that AbstractOcTree::read and
+  // octomap tools linking octomap_ext can create it from a file header.
+  class StaticMemberInitializer {
+   public:
+    StaticMemberInitializer();
+    void ensureLinking() {}
+  };
+  static StaticMemberInitializer semioctree_member_init_;
+
+ private:
+  struct SegmentFrame;  // per-segment constants of traverse()
+  template <class Visitor>
+  bool traverse_children(const SegmentFrame& f, const SemiOcTreeNode* node, unsigned level,
+                         const std::int64_t base[3], double t_in, int p_in, double t_out,
+                         int p_out, Visitor& visit) const;
+  static std::uint64_t pack(const octomap::OcTreeKey& coarse_key_bits);
+  void rebuild_coarse_index();
+  void prune_subtree(SemiOcTreeNode* node);
+  void mark_coarse_recurs(SemiOcTreeNode* node, unsigned depth, octomap::OcTreeKey key);
+  void delete_children(SemiOcTreeNode* node);
+
+  unsigned coarse_level_ = 0;
+  // Packed (key >> k) of each coarse voxel → its node.
+  CoarseTable<SemiOcTreeNode> coarse_;
+};
+
+// Thrown for malformed tree data (bad magic, truncation, hash mismatch, ...).
+class FileFormatError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace semioctree
+
+#include "semioctree/octomap_ext/semioctree_impl.hxx"

@@ -1,0 +1,226 @@
+// Template members of SemiOcTree (included from semioctree.h).
+#pragma once
+
+#include <cstdint>
+#include <limits>
+
+namespace semioctree {
+
+namespace detail {
+
+inline octomap::OcTreeKey child_key(const octomap::OcTreeKey& parent, unsigned parent_depth,
+                                    unsigned idx) {
+  const unsigned bit = SemiOcTree::kTreeDepth - 1 - parent_depth;
+  octomap::OcTreeKey k = parent;
+  for (unsigned a = 0; a < 3; ++a)
+    if (idx & (1u << a)) k.k[a] = static_cast<octomap::key_type>(k.k[a] | (1u << bit));
+  return k;
+}
+
+template <class Tree, class F>
+void walk_depth_first(const Tree& tree, const SemiOcTreeNode* node, unsigned depth,
+                      const octomap::OcTreeKey& key, F& f) {
+  if (!f(node, depth, key)) return;  // f decides whether to descend
+  if (!tree.nodeHasChildren(node)) return;
+  for (unsigned i = 0; i < 8; ++i)
+    if (tree.nodeChildExists(node, i))
+      walk_depth_first(tree, tree.getNodeChild(node, i), depth + 1, child_key(key, depth, i), f);
+}
+
+}  // namespace detail
+
+template <class F>
+void SemiOcTree::for_each_coarse(F&& f) const {
+  if (!root) return;
+  const unsigned cd = coarse_depth();
+  auto visit = [&](const SemiOcTreeNode* node, unsigned depth, const octomap::OcTreeKey& key) {
+    if (depth < cd) return true;
+    f(coarse_index(key), const_cast<SemiOcTreeNode*>(node));
+    return false;
+  };
+  detail::walk_depth_first(*this, root, 0, octomap::OcTreeKey(0, 0, 0), visit);
+}
+
+template <class F>
+void SemiOcTree::for_each_octant(F&& f) const {
+  if (!root) return;
+  const unsigned cd = coarse_depth();
+  auto visit = [&](const SemiOcTreeNode* node, unsigned depth, const octomap::OcTreeKey& key) {
+    if (nodeHasChildren(node)) return true;
+    if (depth >= cd) f(make_octant(key, depth - cd, node));
+    return false;
+  };
+  detail::walk_depth_first(*this, root, 0, octomap::OcTreeKey(0, 0, 0), visit);
+}
+
+// Traversal. Positions are in leaf-cell units relative to the world origin
+// (cell i is [i, i+1)), scaled exactly as OctoMap's coordToKey does, so our
+// cells are its cells. An axis reaches boundary plane p at
+// t = (p − A)·(1/(B − A)); every decision uses this one formula, so ties
+// (edges, corners) resolve consistently. Crossing events are ordered by
+// (t, phase): moving up, a point on a plane already belongs to the cell above
+// (phase 0, at t); moving down it belongs to that cell until just after t
+// (phase 1). Only planes between the start and end cells are ever crossed.
+struct SemiOcTree::SegmentFrame {
+  double A[3], invD[3];
+  std::int64_t s[3], e[3];  // start and end cells
+  int dir[3], phase[3];
+  double cross(int i, std::int64_t plane) const { return (double(plane) - A[i]) * invD[i]; }
+};
+
+namespace detail {
+// (t1, p1) < (t2, p2)
+inline bool event_before(double t1, int p1, double t2, int p2) {
+  return t1 < t2 || (t1 == t2 && p1 < p2);
+}
+}  // namespace detail
+
+template <class Visitor>
+bool SemiOcTree::traverse_children(const SegmentFrame& f, const SemiOcTreeNode* node,
+                                   unsigned level, const std::int64_t base[3], double t_in,
+                                   int p_in, double t_out, int p_out, Visitor& visit) const {
+  // The segment is inside `node` for events in [in, out). Its children are
+  // entered where the segment crosses the node's three mid-planes.
+  const std::int64_t half = std::int64_t(1) << (coarse_level_ - level - 1);
+  unsigned child = 0;      // bit i: upper half along axis i
+  unsigned pending = 0;    // bit i: mid-plane i is crossed after `in`, before `out`
+  double tm[3] = {0, 0, 0};
+#pragma GCC unroll 3
+  for (int i = 0; i < 3; ++i) {
+    const std::int64_t mid = base[i] + half;
+    const bool start_upper = f.s[i] >= mid;
+    const bool crosses = f.dir[i] > 0 ? (f.s[i] < mid && mid <= f.e[i])
+                                      : (f.dir[i] < 0 && f.e[i] < mid && mid <= f.s[i]);
+    bool upper = start_upper;
+    if (crosses) {
+      tm[i] = f.cross(i, mid);
+      if (!detail::event_before(t_in, p_in, tm[i], f.phase[i])) {
+        upper = !start_upper;  // already crossed when the node was entered
+      } else if (detail::event_before(tm[i], f.phase[i], t_out, p_out)) {
+        pending |= 1u << i;
+      }
+    }
+    child |= unsigned(upper) << i;
+  }
+  double t_cur = t_in;
+  int p_cur = p_in;
+  for (;;) {
+    // Next event: the earliest pending mid-plane crossing, or leaving the node.
+    double t_next = t_out;
+    int p_next = p_out;
+    unsigned flips = 0;
+#pragma GCC unroll 3
+    for (int i = 0; i < 3; ++i) {
+      if (!(pending & (1u << i))) continue;
+      if (detail::event_before(tm[i], f.phase[i], t_next, p_next)) {
+        t_next = tm[i];
+        p_next = f.phase[i];
+        flips = 1u << i;
+      } else if (tm[i] == t_next && f.phase[i] == p_next) {
+        flips |= 1u << i;
+      }
+    }
+    if (flips && nodeChildExists(node, child ^ flips))
+      __builtin_prefetch(getNodeChild(node, child ^ flips));  // the sibling entered next
+    std::int64_t child_base[3];
+#pragma GCC unroll 3
+    for (int i = 0; i < 3; ++i) child_base[i] = base[i] + ((child >> i) & 1u ? half : 0);
+    const SemiOcTreeNode* c = nodeChildExists(node, child) ? getNodeChild(node, child) : nullptr;
+    if (c && level + 1 < coarse_level_ && nodeHasChildren(c)) {
+      if (!traverse_children(f, c, level + 1, child_base, t_cur, p_cur, t_next, p_next, visit))
+        return false;
+    } else {
+      const octomap::OcTreeKey key(static_cast<octomap::key_type>(child_base[0] + 32768),
+                                   static_cast<octomap::key_type>(child_base[1] + 32768),
+                                   static_cast<octomap::key_type>(child_base[2] + 32768));
+      if (!visit(RayStep{key, level + 1, c, t_cur == -std::numeric_limits<double>::infinity() ? 0.0 : t_cur}))
+        return false;
+    }
+    if (!flips) return true;  // left the node
+    child ^= flips;
+    pending &= ~flips;
+    t_cur = t_next;
+    p_cur = p_next;
+  }
+}
+
+template <class Visitor>
+TraversalEnd SemiOcTree::traverse(const Point3& a, const Point3& b, Visitor&& visit) const {
+  SegmentFrame f;
+  const double inv = resolution_factor;
+  const double P[2][3] = {{a.x * inv, a.y * inv, a.z * inv}, {b.x * inv, b.y * inv, b.z * inv}};
+  constexpr double kKeyHalf = 32768.0;
+  for (int i = 0; i < 3; ++i) {
+    const double fa = std::floor(P[0][i]), fb = std::floor(P[1][i]);
+    if (!(fa >= -kKeyHalf && fa < kKeyHalf && fb >= -kKeyHalf && fb < kKeyHalf))
+      return TraversalEnd::kOutOfRange;  // also catches NaN
+    f.A[i] = P[0][i];
+    f.s[i] = static_cast<std::int64_t>(fa);
+    f.e[i] = static_cast<std::int64_t>(fb);
+    f.dir[i] = f.e[i] > f.s[i] ? 1 : (f.e[i] < f.s[i] ? -1 : 0);
+    f.phase[i] = f.dir[i] < 0 ? 1 : 0;
+    f.invD[i] = f.dir[i] != 0 ? 1.0 / (P[1][i] - P[0][i]) : 0.0;
+  }
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  const unsigned k = coarse_level_;
+  // Coarse-level DDA: the coarse cell and the next coarse plane crossing per axis.
+  std::int64_t cc[3], ce[3];
+  double tn[3];
+  for (int i = 0; i < 3; ++i) {
+    cc[i] = f.s[i] >> k;  // arithmetic shift: floor division for negative cells too
+    ce[i] = f.e[i] >> k;
+    tn[i] = cc[i] == ce[i] ? kInf : f.cross(i, (cc[i] + (f.dir[i] > 0 ? 1 : 0)) << k);
+  }
+  double t_in = -kInf;
+  int p_in = 0;
+  for (;;) {
+    double t_out = kInf;
+    int p_out = 2;
+    unsigned exits = 0;
+#pragma GCC unroll 3
+    for (int i = 0; i < 3; ++i) {
+      if (cc[i] == ce[i]) continue;
+      if (detail::event_before(tn[i], f.phase[i], t_out, p_out)) {
+        t_out = tn[i];
+        p_out = f.phase[i];
+        exits = 1u << i;
+      } else if (tn[i] == t_out && f.phase[i] == p_out) {
+        exits |= 1u << i;
+      }
+    }
+    std::int64_t base[3];
+    octomap::OcTreeKey key;
+#pragma GCC unroll 3
+    for (int i = 0; i < 3; ++i) {
+      base[i] = cc[i] << k;
+      key.k[i] = static_cast<octomap::key_type>(base[i] + 32768);
+    }
+    // O(1) access to the coarse voxel through the hashed grid.
+    const SemiOcTreeNode* node = coarse_.find((std::uint64_t(key.k[0] >> k) << 32) |
+                                              (std::uint64_t(key.k[1] >> k) << 16) |
+                                              std::uint64_t(key.k[2] >> k));
+    if (exits) {  // fetch the next coarse voxel's slot while this one is handled
+      std::uint64_t next[3];
+      for (int i = 0; i < 3; ++i)
+        next[i] = std::uint64_t(((cc[i] + ((exits >> i) & 1u ? f.dir[i] : 0)) << k) + 32768) >> k;
+      coarse_.prefetch((next[0] << 32) | (next[1] << 16) | next[2]);
+    }
+    if (node && k > 0 && nodeHasChildren(node)) {
+      if (!traverse_children(f, node, 0, base, t_in, p_in, t_out, p_out, visit))
+        return TraversalEnd::kStopped;
+    } else if (!visit(RayStep{key, 0, node, t_in == -kInf ? 0.0 : t_in})) {
+      return TraversalEnd::kStopped;
+    }
+    if (!exits) return TraversalEnd::kReachedEnd;
+#pragma GCC unroll 3
+    for (int i = 0; i < 3; ++i) {
+      if (!(exits & (1u << i))) continue;
+      cc[i] += f.dir[i];
+      tn[i] = cc[i] == ce[i] ? kInf : f.cross(i, (cc[i] + (f.dir[i] > 0 ? 1 : 0)) << k);
+    }
+    t_in = t_out;
+    p_in = p_out;
+  }
+}
+
+}  // namespace semioctree

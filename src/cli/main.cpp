@@ -1,0 +1,30 @@
+// `semioctree`: the command-line tool (git-style subcommands).
+#include <exception>
+#include <iostream>
+
+#include "commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "semioctree " SEMIOCTREE_VERSION
+      " — Next-Best-View planning for indoor laser-scanning surveys on a semioctree\n"
+      "(a world-aligned coarse voxel grid refined as OctoMap octrees where needed)."};
+  app.set_version_flag("--version", std::string("semioctree ") + SEMIOCTREE_VERSION);
+  app.require_subcommand(1);
+  app.fallthrough(false);
+  semioctree::cli::add_info_command(app);
+  semioctree::cli::add_export_command(app);
+#ifdef SEMIOCTREE_HAVE_SIM
+  semioctree::cli::add_scan_command(app);
+  semioctree::cli::add_scene_info_command(app);
+#endif
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    std::cerr << "semioctree: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

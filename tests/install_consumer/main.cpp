@@ -1,0 +1,23 @@
+// Uses the installed library: builds a SemiOcTree, writes it, reads it back
+// through OctoMap's factory, and traverses a ray. Exit code 0 on success.
+#include <octomap/AbstractOcTree.h>
+#include <semioctree/octomap_ext/semioctree.h>
+#include <semioctree/version.h>
+
+#include <cstdio>
+#include <memory>
+#include <sstream>
+
+int main() {
+  semioctree::SemiOcTree tree(0.05, 0.8);
+  tree.create_coarse({0, 0, 0}, semioctree::Label::kEmpty);
+  std::stringstream buf;
+  if (!tree.write(buf)) return 1;
+  std::unique_ptr<octomap::AbstractOcTree> back(octomap::AbstractOcTree::read(buf));
+  auto* semi = dynamic_cast<semioctree::SemiOcTree*>(back.get());
+  if (!semi || semi->coarse_level() != 4) return 2;
+  int steps = 0;
+  semi->traverse({0.1, 0.1, 0.1}, {0.7, 0.7, 0.7}, [&](const semioctree::RayStep&) { return ++steps > 0; });
+  std::printf("semioctree %s: %d step(s)\n", semioctree::version(), steps);
+  return steps == 1 ? 0 : 3;
+}

@@ -1,0 +1,19 @@
+# Tests and benchmark of the OctoMap extension (octomap_ext/).
+foreach(t test_semioctree test_traversal test_file_io test_export)
+  semioctree_add_test(${t} SOURCES ${t}.cpp LIBS octomap_ext)
+  target_include_directories(${t} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+endforeach()
+semioctree_add_bench(bench_traversal SOURCES bench_traversal.cpp LIBS octomap_ext)
+
+# The command-line tool (runs the built binary).
+semioctree_add_test(test_cli SOURCES test_cli.cpp LIBS octomap_ext)
+target_include_directories(test_cli PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+target_compile_definitions(test_cli PRIVATE SEMIOCTREE_VERSION="${PROJECT_VERSION}")
+add_dependencies(test_cli semioctree_cli)
+
+# The installed CMake package works for an outside project.
+add_test(NAME install_package
+         COMMAND ${CMAKE_COMMAND} -DBUILD_DIR=${PROJECT_BINARY_DIR} -DSOURCE_DIR=${PROJECT_SOURCE_DIR}
+                 -DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR}/install_package
+                 -P ${CMAKE_CURRENT_SOURCE_DIR}/install_consumer/run.cmake)
+set_tests_properties(install_package PROPERTIES TIMEOUT 600)

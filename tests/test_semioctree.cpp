@@ -1,0 +1,254 @@
+// SemiOcTree: node layout, coarse grid alignment, octant edits, pruning,
+// statistics, compaction and the .ot round trip.
+#include <gtest/gtest.h>
+#include <octomap/AbstractOcTree.h>
+
+#include <cmath>
+#include <map>
+#include <random>
+#include <sstream>
+#include <tuple>
+
+#include "semioctree/octomap_ext/semioctree.h"
+
+namespace semioctree {
+namespace {
+
+using OctantId = std::tuple<unsigned, unsigned, unsigned, unsigned>;  // key xyz, level
+
+std::map<OctantId, std::tuple<Label, float, std::uint8_t, std::uint16_t>> octant_map(
+    const SemiOcTree& t) {
+  std::map<OctantId, std::tuple<Label, float, std::uint8_t, std::uint16_t>> m;
+  t.for_each_octant([&](const Octant& o) {
+    m[{o.key.k[0], o.key.k[1], o.key.k[2], o.level}] =
+        std::make_tuple(o.label(), o.node->getLogOdds(),
+                        std::uint8_t(o.node->flags() & SemiOcTreeNode::kPersistentFlags),
+                        o.node->aux());
+  });
+  return m;
+}
+
+octomap::OcTreeKey key_at(const SemiOcTree& t, double x, double y, double z) {
+  octomap::OcTreeKey k;
+  EXPECT_TRUE(t.key_of({x, y, z}, k));
+  return k;
+}
+
+TEST(SemiOcTreeNode, IsSixteenBytesAndKeepsLabel) {
+  EXPECT_EQ(sizeof(SemiOcTreeNode), 16u);
+  SemiOcTreeNode n;
+  EXPECT_EQ(n.label(), Label::kUnknown);
+  n.set_label(Label::kWindow);
+  n.set_aux(513);
+  n.set_flag(SemiOcTreeNode::kSeen, true);
+  SemiOcTreeNode m;
+  m.copyData(n);
+  EXPECT_EQ(m.label(), Label::kWindow);
+  EXPECT_EQ(m.aux(), 513);
+  EXPECT_TRUE(m.has_flag(SemiOcTreeNode::kSeen));
+  EXPECT_TRUE(m == n);
+  m.set_label(Label::kDoor);
+  EXPECT_FALSE(m == n);
+}
+
+TEST(SemiOcTree, ValidatesLeafAndCoarseSize) {
+  EXPECT_EQ(SemiOcTree(0.05, 0.8).coarse_level(), 4u);
+  EXPECT_EQ(SemiOcTree(0.05, 0.05).coarse_level(), 0u);
+  EXPECT_EQ(SemiOcTree(0.1, 0.8).coarse_level(), 3u);
+  try {
+    SemiOcTree bad(0.05, 0.7);
+    FAIL() << "0.7 is not 0.05 times a power of two";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("power of two"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("0.7"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(SemiOcTree(0.0, 0.8), std::invalid_argument);
+  EXPECT_THROW(SemiOcTree(-0.05, 0.8), std::invalid_argument);
+  EXPECT_THROW(SemiOcTree(0.05, std::nan("")), std::invalid_argument);
+  EXPECT_THROW(SemiOcTree(0.05, 0.025), std::invalid_argument);  // coarse below leaf
+}
+
+// Coarse voxel (i, j, l) is [iL, (i+1)L)³, whatever the point's sign.
+TEST(SemiOcTree, CoarseGridIsAlignedToTheWorld) {
+  for (const auto& [leaf, coarse] : {std::pair{0.05, 0.8}, std::pair{0.125, 1.0}}) {
+    SemiOcTree t(leaf, coarse);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-20.0, 20.0);
+    std::uniform_int_distribution<int> cell(-25, 25);
+    for (int n = 0; n < 20000; ++n) {
+      Point3 p(u(rng), u(rng), u(rng));
+      if (n % 3 == 0) p = {cell(rng) * coarse, cell(rng) * coarse, cell(rng) * coarse};  // on faces
+      if (n % 3 == 1) p.x = cell(rng) * coarse;
+      CoarseIndex c;
+      ASSERT_TRUE(t.coarse_index_of(p, c));
+      // Consistent with the leaf key: the coarse index is the key shifted by k.
+      octomap::OcTreeKey key;
+      ASSERT_TRUE(t.key_of(p, key));
+      EXPECT_EQ(c.x, int(key.k[0] >> t.coarse_level()) - int(32768 >> t.coarse_level()));
+      // The point lies in [iL, (i+1)L); exact when L is exact in binary.
+      const double tol = (coarse == 1.0) ? 0.0 : 1e-9;
+      for (int a = 0; a < 3; ++a) {
+        const int ci = a == 0 ? c.x : (a == 1 ? c.y : c.z);
+        EXPECT_GE(p[a], ci * coarse - tol) << "axis " << a << " p " << p[a];
+        EXPECT_LT(p[a], (ci + 1) * coarse + tol) << "axis " << a << " p " << p[a];
+        if (coarse == 1.0) {
+          EXPECT_EQ(ci, int(std::floor(p[a])));
+        }
+      }
+      // The coarse voxel's min corner maps back to the same index.
+      CoarseIndex back;
+      ASSERT_TRUE(t.coarse_index_of(t.coarse_min_corner(c), back));
+      if (coarse == 1.0) {
+        EXPECT_EQ(back, c);
+      }
+    }
+  }
+}
+
+TEST(SemiOcTree, CoarseVoxelsOfTwoTreesCoincide) {
+  SemiOcTree a(0.05, 0.8), b(0.05, 0.8);
+  a.create_coarse({-3, 2, -1});
+  b.create_coarse({5, 5, 5});
+  b.create_coarse({-3, 2, -1});
+  CoarseIndex ca, cb;
+  ASSERT_TRUE(a.coarse_index_of({-2.0, 1.7, -0.1}, ca));
+  ASSERT_TRUE(b.coarse_index_of({-2.0, 1.7, -0.1}, cb));
+  EXPECT_EQ(ca, cb);
+  EXPECT_EQ(ca, (CoarseIndex{-3, 2, -1}));
+  EXPECT_NE(a.find_coarse(ca), nullptr);
+  EXPECT_NE(b.find_coarse(cb), nullptr);
+  EXPECT_EQ(a.coarse_count(), 1u);
+  EXPECT_EQ(b.coarse_count(), 2u);
+}
+
+TEST(SemiOcTree, SetLabelAtAnyLevelAndSplit) {
+  SemiOcTree t(0.05, 0.8);  // k = 4
+  const auto key = key_at(t, 0.33, 0.41, 0.07);
+  t.set_label(key, 0, Label::kEmpty);
+  auto o = t.find_octant(key);
+  ASSERT_TRUE(o);
+  EXPECT_EQ(o->level, 0u);
+  EXPECT_DOUBLE_EQ(o->size, 0.8);
+  EXPECT_EQ(o->label(), Label::kEmpty);
+  EXPECT_NEAR(o->center.x, 0.4, 1e-12);
+
+  t.split(key, 0);  // children inherit the label
+  o = t.find_octant(key);
+  EXPECT_EQ(o->level, 1u);
+  EXPECT_EQ(o->label(), Label::kEmpty);
+  EXPECT_EQ(t.statistics().at_level(1), 8u);
+
+  t.set_label(key, 4, Label::kOccupied);  // a leaf: splits levels 1..3 on the way
+  o = t.find_octant(key);
+  EXPECT_EQ(o->level, 4u);
+  EXPECT_DOUBLE_EQ(o->size, 0.05);
+  EXPECT_EQ(o->label(), Label::kOccupied);
+  EXPECT_TRUE(t.isNodeOccupied(o->node));
+  const auto st = t.statistics();
+  EXPECT_EQ(st.total(), 8u + 7u + 7u + 7u);  // 7 siblings at levels 1..3, 8 leaves
+  EXPECT_EQ(st.count[4][int(Label::kOccupied)], 1u);
+  EXPECT_EQ(st.count[4][int(Label::kEmpty)], 7u);
+  EXPECT_NEAR(st.volume[int(Label::kOccupied)], 0.05 * 0.05 * 0.05, 1e-15);
+  EXPECT_NEAR(st.total_volume(), 0.8 * 0.8 * 0.8, 1e-12);
+
+  // Labelling the coarse voxel again makes it one octant: children removed.
+  const std::size_t before = t.size();
+  t.set_label(key, 0, Label::kOccluded);
+  EXPECT_EQ(t.statistics().total(), 1u);
+  EXPECT_EQ(t.size(), before - 8u * 4u);
+  EXPECT_EQ(t.size(), t.calcNumNodes());
+  EXPECT_THROW(t.split(key, 4), std::logic_error);
+}
+
+TEST(SemiOcTree, PruneMergesOnlySameLabelsAndKeepsCoarseVoxels) {
+  SemiOcTree t(0.1, 0.8);  // k = 3
+  // 8 coarse voxels forming a 2×2×2 block, all empty and unsplit: OctoMap would
+  // merge them into their parent; we must not.
+  for (int x = 0; x < 2; ++x)
+    for (int y = 0; y < 2; ++y)
+      for (int z = 0; z < 2; ++z) t.create_coarse({x, y, z}, Label::kEmpty);
+  // One coarse voxel split into 8 same-label children: merges back.
+  const auto k1 = key_at(t, 0.1, 0.1, 0.1);
+  t.split(k1, 0);
+  // Another split with one different child: stays split.
+  const auto k2 = key_at(t, 0.9, 0.1, 0.1);
+  t.split(k2, 0);
+  t.set_label(k2, 1, Label::kOccluded);
+  t.prune();
+  EXPECT_EQ(t.coarse_count(), 8u);
+  const auto st = t.statistics();
+  EXPECT_EQ(st.at_level(0), 7u);
+  EXPECT_EQ(st.at_level(1), 8u);
+  EXPECT_EQ(st.count[1][int(Label::kOccluded)], 1u);
+  for (int x = 0; x < 2; ++x)
+    for (int y = 0; y < 2; ++y)
+      for (int z = 0; z < 2; ++z) EXPECT_NE(t.find_coarse({x, y, z}), nullptr);
+  // The index still points at live nodes: a traversal sees every voxel.
+  int steps = 0, split_steps = 0;
+  t.traverse({0.05, 0.1, 0.1}, {1.5, 1.3, 1.1}, [&](const RayStep& s) {
+    EXPECT_NE(s.node, nullptr);
+    ++steps;
+    split_steps += s.level == 1;
+    return true;
+  });
+  EXPECT_GE(steps, 4);
+  EXPECT_GE(split_steps, 1);  // passes through the voxel that stayed split
+  EXPECT_EQ(t.size(), t.calcNumNodes());
+}
+
+TEST(SemiOcTree, CompactKeepsEveryOctant) {
+  SemiOcTree t(0.05, 0.4);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_int_distribution<int> lvl(0, 3), lab(0, kLabelCount - 1);
+  for (int i = 0; i < 300; ++i) t.set_label(key_at(t, u(rng), u(rng), u(rng)), lvl(rng), Label(lab(rng)));
+  const auto before = octant_map(t);
+  t.compact();
+  EXPECT_EQ(octant_map(t), before);
+  EXPECT_EQ(t.size(), t.calcNumNodes());
+  const auto o = t.find_octant(Point3(0.01, 0.01, 0.01));
+  ASSERT_TRUE(o);
+  EXPECT_EQ(t.find_coarse(t.coarse_index(o->key)) != nullptr, true);
+}
+
+TEST(SemiOcTree, OtRoundTripIsLossless) {
+  // 1/30 m: a resolution the .ot header's 6 digits cannot hold exactly.
+  SemiOcTree t(1.0 / 30.0, 8.0 / 30.0);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  std::uniform_int_distribution<int> lvl(0, 3), lab(0, kLabelCount - 1), aux(0, 65535);
+  for (int i = 0; i < 500; ++i) {
+    SemiOcTreeNode* n = t.set_label(key_at(t, u(rng), u(rng), u(rng)), lvl(rng), Label(lab(rng)));
+    n->set_aux(std::uint16_t(aux(rng)));
+    n->set_flag(SemiOcTreeNode::kSeen, i % 2 == 0);
+  }
+  std::stringstream buf;
+  ASSERT_TRUE(t.write(buf));
+  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(buf));
+  ASSERT_TRUE(read);
+  auto* back = dynamic_cast<SemiOcTree*>(read.get());
+  ASSERT_NE(back, nullptr) << "AbstractOcTree::read must create a SemiOcTree";
+  EXPECT_EQ(back->getResolution(), t.getResolution());  // exact, not 6 digits
+  EXPECT_EQ(back->coarse_level(), t.coarse_level());
+  EXPECT_EQ(back->coarse_count(), t.coarse_count());
+  EXPECT_EQ(back->size(), t.size());
+  EXPECT_EQ(octant_map(*back), octant_map(t));
+}
+
+TEST(SemiOcTree, ReadDataRejectsCorruptPayload) {
+  SemiOcTree t(0.05, 0.8);
+  t.set_label(key_at(t, 0.1, 0.2, 0.3), 2, Label::kOccluded);
+  std::stringstream buf;
+  t.writeData(buf);
+  std::string data = buf.str();
+  data[data.size() - 3] ^= 0x10;  // a byte inside the node stream
+  std::istringstream in(data);
+  SemiOcTree back(0.05);
+  EXPECT_THROW(back.readData(in), FileFormatError);
+  EXPECT_EQ(back.size(), 0u);
+  std::istringstream truncated(buf.str().substr(0, 30));
+  EXPECT_THROW(back.readData(truncated), FileFormatError);
+}
+
+}  // namespace
+}  // namespace semioctree
