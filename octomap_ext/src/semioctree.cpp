@@ -366,6 +366,8 @@ bool SemiOcTree::isNodeCollapsible(const SemiOcTreeNode* node) const {
   const SemiOcTreeNode* first = getNodeChild(node, 0);
   if (first->is_coarse_root()) return false;  // the coarse grid is never merged away
   if (nodeHasChildren(first)) return false;
+  // Occupied octants exist only at the leaf level (paper 2.2.1).
+  if (first->label() == Label::kOccupied) return false;
   for (unsigned i = 1; i < 8; ++i) {
     if (!nodeChildExists(node, i)) return false;
     const SemiOcTreeNode* child = getNodeChild(node, i);

@@ -14,6 +14,8 @@ int main(int argc, char** argv) {
   app.fallthrough(false);
   semioctree::cli::add_info_command(app);
   semioctree::cli::add_export_command(app);
+  semioctree::cli::add_discretize_command(app);
+  semioctree::cli::add_compare_command(app);
 #ifdef SEMIOCTREE_HAVE_SIM
   semioctree::cli::add_scan_command(app);
   semioctree::cli::add_scene_info_command(app);

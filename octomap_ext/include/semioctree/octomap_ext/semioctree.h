@@ -148,7 +148,8 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
   std::size_t memory_bytes() const;
 
   // Merges 8 sibling octants into their parent only when they carry the same
-  // label (and value); coarse voxels are never merged away.
+  // label (and value); coarse voxels are never merged away, and occupied
+  // octants never leave the leaf level.
   void prune() override;
   bool isNodeCollapsible(const SemiOcTreeNode* node) const override;
   void clear() override;

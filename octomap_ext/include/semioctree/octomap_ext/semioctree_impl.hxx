@@ -163,13 +163,14 @@ TraversalEnd SemiOcTree::traverse(const Point3& a, const Point3& b, Visitor&& vi
   }
   constexpr double kInf = std::numeric_limits<double>::infinity();
   const unsigned k = coarse_level_;
+  const std::int64_t span = std::int64_t(1) << k;  // leaf cells per coarse voxel (no << on negatives)
   // Coarse-level DDA: the coarse cell and the next coarse plane crossing per axis.
   std::int64_t cc[3], ce[3];
   double tn[3];
   for (int i = 0; i < 3; ++i) {
     cc[i] = f.s[i] >> k;  // arithmetic shift: floor division for negative cells too
     ce[i] = f.e[i] >> k;
-    tn[i] = cc[i] == ce[i] ? kInf : f.cross(i, (cc[i] + (f.dir[i] > 0 ? 1 : 0)) << k);
+    tn[i] = cc[i] == ce[i] ? kInf : f.cross(i, (cc[i] + (f.dir[i] > 0 ? 1 : 0)) * span);
   }
   double t_in = -kInf;
   int p_in = 0;
@@ -192,7 +193,7 @@ TraversalEnd SemiOcTree::traverse(const Point3& a, const Point3& b, Visitor&& vi
     octomap::OcTreeKey key;
 #pragma GCC unroll 3
     for (int i = 0; i < 3; ++i) {
-      base[i] = cc[i] << k;
+      base[i] = cc[i] * span;
       key.k[i] = static_cast<octomap::key_type>(base[i] + 32768);
     }
     // O(1) access to the coarse voxel through the hashed grid.
@@ -202,7 +203,7 @@ TraversalEnd SemiOcTree::traverse(const Point3& a, const Point3& b, Visitor&& vi
     if (exits) {  // fetch the next coarse voxel's slot while this one is handled
       std::uint64_t next[3];
       for (int i = 0; i < 3; ++i)
-        next[i] = std::uint64_t(((cc[i] + ((exits >> i) & 1u ? f.dir[i] : 0)) << k) + 32768) >> k;
+        next[i] = std::uint64_t((cc[i] + ((exits >> i) & 1u ? f.dir[i] : 0)) * span + 32768) >> k;
       coarse_.prefetch((next[0] << 32) | (next[1] << 16) | next[2]);
     }
     if (node && k > 0 && nodeHasChildren(node)) {
@@ -216,7 +217,7 @@ TraversalEnd SemiOcTree::traverse(const Point3& a, const Point3& b, Visitor&& vi
     for (int i = 0; i < 3; ++i) {
       if (!(exits & (1u << i))) continue;
       cc[i] += f.dir[i];
-      tn[i] = cc[i] == ce[i] ? kInf : f.cross(i, (cc[i] + (f.dir[i] > 0 ? 1 : 0)) << k);
+      tn[i] = cc[i] == ce[i] ? kInf : f.cross(i, (cc[i] + (f.dir[i] > 0 ? 1 : 0)) * span);
     }
     t_in = t_out;
     p_in = p_out;

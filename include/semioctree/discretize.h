@@ -1,0 +1,37 @@
+// Stage 3 (paper 2.2, 2.2.1): occupancy analysis into the SemiOcTree. Coarse
+// voxels of side L cover the cloud's bounds between floor and ceiling, snapped
+// to the world grid, all `empty` candidates at first; every voxel holding a
+// point is split, children holding points are split again down to the leaf
+// size, and the leaf holding a point is `occupied`. Children without points
+// stay unsplit (candidates for the occlusion study). Occupied octants exist
+// only at the leaf level. With L = r it is the homogeneous voxelization,
+// through the same code.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+
+#include "semioctree/octomap_ext/semioctree.h"
+#include "semioctree/scan_io.h"
+
+namespace semioctree {
+
+struct DiscretizeParams {
+  double leaf = 0.05;    // r
+  double coarse = 0.8;   // L = r·2^k
+};
+
+struct DiscretizeReport {
+  std::size_t points_used = 0;      // between floor and ceiling
+  std::size_t points_outside = 0;   // below the floor or above the ceiling
+  std::size_t occupied_leaves = 0;
+  CoarseIndex min_coarse, max_coarse;  // inclusive range of coarse voxels
+};
+
+// `cloud` is levelled with the floor at z = 0 (see preprocess). Throws
+// std::invalid_argument for a bad leaf/coarse pair or an empty room.
+std::unique_ptr<SemiOcTree> discretize(const Cloud& cloud, double ceiling_height,
+                                       const DiscretizeParams& params,
+                                       DiscretizeReport* report = nullptr);
+
+}  // namespace semioctree

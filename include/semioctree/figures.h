@@ -1,0 +1,37 @@
+// The paper's figures of a discretization: statistics of one run (octants per
+// level and label, volume % per label — Table 1 —, memory), and the comparison
+// of the semioctree against the homogeneous grid over resolutions: octant
+// counts (Fig 15), increment factor per halving (Table 2), as JSON, Markdown
+// and a PNG chart.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "semioctree/octomap_ext/semioctree.h"
+
+namespace semioctree {
+
+struct DiscretizationRun {
+  std::string method;  // "semioctree" or "homogeneous"
+  double leaf = 0, coarse = 0;
+  OctantStatistics stats;
+  std::size_t memory_bytes = 0;
+  double seconds = 0;
+};
+
+// Volume % per label over all labelled octants (Table 1 columns).
+double volume_percent(const OctantStatistics& s, Label l);
+
+// stats.json of one run (written atomically).
+void write_run_json(const DiscretizationRun& run, const std::string& path);
+
+// comparison.json, comparison.md and fig15_octants.png in `dir`. `runs` holds
+// both methods at each resolution.
+void write_comparison(const std::vector<DiscretizationRun>& runs, const std::string& dir);
+
+// Increment factors count(r/2) / count(r) of one method, runs ordered by
+// decreasing resolution size; used by write_comparison and tests.
+std::vector<double> increment_factors(const std::vector<DiscretizationRun>& runs_of_one_method);
+
+}  // namespace semioctree

@@ -1,0 +1,54 @@
+// Scans in: a scan is its points (in the scanner's frame) plus the scanner's
+// pose in the survey frame. Readers for PCD and PLY (PCL), XYZ text and PTX
+// (several scans per file, each with its pose). NaN/Inf points are dropped and
+// counted, never fatal.
+#pragma once
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace semioctree {
+
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+
+// Scanner pose: the rigid transform from the scanner's frame to the survey frame.
+struct ScanPose {
+  Eigen::Isometry3d scanner_to_survey = Eigen::Isometry3d::Identity();
+
+  static ScanPose from_xyz_yaw(double x, double y, double z, double yaw_deg);
+  Eigen::Vector3d position() const { return scanner_to_survey.translation(); }
+  double yaw_deg() const;  // heading about z
+};
+
+struct Scan {
+  Cloud::Ptr points;  // scanner frame
+  ScanPose pose;
+  std::string source;               // file (and scan number for PTX)
+  std::size_t invalid_dropped = 0;  // NaN/Inf points and PTX "no return" points
+};
+
+// Bad input: the message names the file (and line where it applies).
+class ScanReadError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// By extension (case-insensitive): .pcd, .ply, .xyz/.txt/.asc, .ptx. PCD, PLY
+// and XYZ give one scan with the identity pose; PTX gives one scan per header.
+std::vector<Scan> read_scans(const std::string& path);
+
+// "X,Y,Z,YAW_DEG" (YAW optional) → pose; throws std::invalid_argument.
+ScanPose parse_pose(const std::string& text);
+// {"x":..,"y":..,"z":..,"yaw_deg":..} → pose; throws ScanReadError.
+ScanPose read_pose_json(const std::string& path);
+
+// Points transformed into the survey frame.
+Cloud::Ptr to_survey_frame(const Scan& scan);
+
+}  // namespace semioctree

@@ -1,0 +1,59 @@
+#include "semioctree/discretize.h"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace semioctree {
+
+std::unique_ptr<SemiOcTree> discretize(const Cloud& cloud, double ceiling_height,
+                                       const DiscretizeParams& params, DiscretizeReport* report) {
+  auto tree = std::make_unique<SemiOcTree>(params.leaf, params.coarse);  // validates L = r·2^k
+  DiscretizeReport rep;
+  if (!(ceiling_height > 0) || !std::isfinite(ceiling_height))
+    throw std::invalid_argument("ceiling height must be above the floor (z = 0), got " +
+                                std::to_string(ceiling_height));
+  // Bounds of the points between floor and ceiling.
+  double lo[2] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+  double hi[2] = {-lo[0], -lo[1]};
+  for (const auto& p : cloud) {
+    if (p.z < 0 || p.z >= ceiling_height) {
+      ++rep.points_outside;
+      continue;
+    }
+    lo[0] = std::min(lo[0], double(p.x));
+    lo[1] = std::min(lo[1], double(p.y));
+    hi[0] = std::max(hi[0], double(p.x));
+    hi[1] = std::max(hi[1], double(p.y));
+    ++rep.points_used;
+  }
+  if (rep.points_used == 0)
+    throw std::invalid_argument("no point lies between the floor and the ceiling");
+  CoarseIndex cmin, cmax;
+  const double below_ceiling = std::nextafter(ceiling_height, 0.0);
+  if (!tree->coarse_index_of({lo[0], lo[1], 0.0}, cmin) ||
+      !tree->coarse_index_of({hi[0], hi[1], below_ceiling}, cmax))
+    throw std::invalid_argument("the cloud lies outside OctoMap's key range at this leaf size");
+  // The coarse grid over the room: every voxel an unsplit `empty` candidate.
+  for (int i = cmin.x; i <= cmax.x; ++i)
+    for (int j = cmin.y; j <= cmax.y; ++j)
+      for (int l = cmin.z; l <= cmax.z; ++l) tree->create_coarse({i, j, l}, Label::kEmpty);
+  // Occupancy: the leaf of every point is occupied; its ancestors are split on the way.
+  const unsigned leaf = tree->coarse_level();
+  for (const auto& p : cloud) {
+    if (p.z < 0 || p.z >= ceiling_height) continue;
+    octomap::OcTreeKey key;
+    if (!tree->key_of({p.x, p.y, p.z}, key)) continue;
+    const auto o = tree->find_octant(key);
+    if (o && o->level == leaf && o->label() == Label::kOccupied) continue;
+    tree->set_label(key, leaf, Label::kOccupied);
+    ++rep.occupied_leaves;
+  }
+  rep.min_coarse = cmin;
+  rep.max_coarse = cmax;
+  if (report) *report = rep;
+  return tree;
+}
+
+}  // namespace semioctree

@@ -1,0 +1,249 @@
+#include "semioctree/preprocess.h"
+
+#include <pcl/common/centroid.h>
+#include <pcl/common/transforms.h>
+#include <pcl/filters/extract_indices.h>
+#include <pcl/filters/uniform_sampling.h>
+#include <pcl/sample_consensus/method_types.h>
+#include <pcl/sample_consensus/model_types.h>
+#include <pcl/segmentation/sac_segmentation.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <sstream>
+#include <vector>
+
+namespace semioctree {
+
+namespace {
+
+struct HorizontalPlane {
+  Eigen::Vector3d normal;  // oriented to +z
+  double d = 0;            // normal·p + d = 0
+  std::size_t inliers = 0; // on the full cloud
+  double height_at(const Eigen::Vector2d& xy) const {
+    return -(d + normal.x() * xy.x() + normal.y() * xy.y()) / normal.z();
+  }
+};
+
+// Horizontal planes by RANSAC on a random subset, largest first; each plane's
+// inliers are removed before looking for the next.
+std::vector<HorizontalPlane> find_horizontal_planes(const Cloud& input, const PreprocessParams& p) {
+  Cloud::Ptr work(new Cloud);
+  if (input.size() > p.ransac_sample) {
+    std::mt19937 rng(12345);
+    std::vector<std::size_t> idx(input.size());
+    std::iota(idx.begin(), idx.end(), 0);
+    std::shuffle(idx.begin(), idx.end(), rng);
+    work->reserve(p.ransac_sample);
+    for (std::size_t i = 0; i < p.ransac_sample; ++i) work->push_back(input[idx[i]]);
+  } else {
+    *work = input;
+  }
+  const double scale = double(input.size()) / double(work->size());
+  pcl::SACSegmentation<pcl::PointXYZ> seg;  // deterministic seed by default
+  seg.setOptimizeCoefficients(true);
+  seg.setModelType(pcl::SACMODEL_PERPENDICULAR_PLANE);
+  seg.setMethodType(pcl::SAC_RANSAC);
+  seg.setAxis(Eigen::Vector3f::UnitZ());
+  seg.setEpsAngle(p.max_tilt_deg * M_PI / 180.0);
+  seg.setDistanceThreshold(p.ransac_distance);
+  seg.setMaxIterations(p.ransac_iterations);
+
+  std::vector<HorizontalPlane> planes;
+  const std::size_t min_inliers = std::size_t(p.min_plane_fraction * double(work->size()));
+  for (int round = 0; round < 8 && work->size() > 100; ++round) {
+    pcl::PointIndices::Ptr inliers(new pcl::PointIndices);
+    pcl::ModelCoefficients coeffs;
+    seg.setInputCloud(work);
+    seg.segment(*inliers, coeffs);
+    if (inliers->indices.size() < std::max<std::size_t>(min_inliers, 50) || coeffs.values.size() != 4)
+      break;
+    HorizontalPlane plane;
+    plane.normal = Eigen::Vector3d(coeffs.values[0], coeffs.values[1], coeffs.values[2]);
+    plane.d = coeffs.values[3];
+    const double len = plane.normal.norm();
+    plane.normal /= len;
+    plane.d /= len;
+    if (plane.normal.z() < 0) {
+      plane.normal = -plane.normal;
+      plane.d = -plane.d;
+    }
+    plane.inliers = std::size_t(double(inliers->indices.size()) * scale);
+    planes.push_back(plane);
+    pcl::ExtractIndices<pcl::PointXYZ> extract;
+    extract.setInputCloud(work);
+    extract.setIndices(inliers);
+    extract.setNegative(true);
+    Cloud::Ptr rest(new Cloud);
+    extract.filter(*rest);
+    work = rest;
+  }
+  return planes;
+}
+
+// Normal of the least-squares plane through the points within `distance` of
+// `plane` (oriented to +z).
+Eigen::Vector3d refine_normal(const Cloud& cloud, const HorizontalPlane& plane, double distance) {
+  Cloud near;
+  for (const auto& q : cloud)
+    if (std::fabs(plane.normal.dot(Eigen::Vector3d(q.x, q.y, q.z)) + plane.d) <= distance)
+      near.push_back(q);
+  if (near.size() < 10) return plane.normal;
+  Eigen::Matrix3f cov;
+  Eigen::Vector4f centroid;
+  pcl::computeMeanAndCovarianceMatrix(near, cov, centroid);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> es(cov);
+  Eigen::Vector3d n = es.eigenvectors().col(0).cast<double>().normalized();
+  return n.z() < 0 ? -n : n;
+}
+
+// Mean and σ of the z values near `guess`, re-centred a few times (a Gaussian
+// fitted to one peak of the z histogram by its moments).
+HeightPeak fit_peak(const std::vector<float>& z, double guess, const PreprocessParams& p) {
+  // Histogram mode within the search window first: the peak itself.
+  const int nb = std::max(1, int(std::ceil(2 * p.peak_window / p.histogram_bin)));
+  std::vector<std::size_t> hist(std::size_t(nb), 0);
+  const double lo = guess - p.peak_window;
+  for (float v : z) {
+    const int b = int(std::floor((v - lo) / p.histogram_bin));
+    if (b >= 0 && b < nb) ++hist[std::size_t(b)];
+  }
+  const auto mode = std::max_element(hist.begin(), hist.end()) - hist.begin();
+  HeightPeak peak;
+  peak.center = lo + (double(mode) + 0.5) * p.histogram_bin;
+  double window = 3 * p.histogram_bin;
+  for (int it = 0; it < 8; ++it) {
+    double sum = 0, sum2 = 0;
+    std::size_t n = 0;
+    for (float v : z) {
+      const double dz = v - peak.center;
+      if (std::fabs(dz) <= window) {
+        sum += dz;
+        sum2 += dz * dz;
+        ++n;
+      }
+    }
+    if (n < 10) break;
+    const double mean = sum / double(n);
+    peak.center += mean;
+    peak.sigma = std::sqrt(std::max(0.0, sum2 / double(n) - mean * mean));
+    // A ±w window truncates the Gaussian; 3σ keeps 99.7 % of it.
+    window = std::max(3.0 * peak.sigma, 2 * p.histogram_bin);
+  }
+  peak.sigma = std::max(peak.sigma, p.min_sigma);
+  return peak;
+}
+
+}  // namespace
+
+Cloud::Ptr decimate(const Cloud& cloud, double spacing) {
+  Cloud::Ptr out(new Cloud);
+  if (spacing <= 0) {
+    *out = cloud;
+    return out;
+  }
+  Cloud::Ptr in(new Cloud(cloud));
+  pcl::UniformSampling<pcl::PointXYZ> us;
+  us.setInputCloud(in);
+  us.setRadiusSearch(spacing);
+  us.filter(*out);
+  return out;
+}
+
+PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
+  PreprocessResult r;
+  r.input_points = input.size();
+  if (input.size() < p.min_points) {
+    std::ostringstream m;
+    m << "too few points to preprocess: " << input.size() << " (need at least " << p.min_points << ")";
+    throw PreprocessError(m.str());
+  }
+  const auto planes = find_horizontal_planes(input, p);
+  if (planes.empty())
+    throw PreprocessError("no horizontal plane found (no floor and no ceiling in the cloud?)");
+  // Floor: the lowest horizontal plane; ceiling: the highest. Heights compared
+  // at the cloud's centre.
+  Eigen::Vector4f centroid;
+  pcl::compute3DCentroid(input, centroid);
+  const Eigen::Vector2d c(centroid.x(), centroid.y());
+  auto lowest = std::min_element(planes.begin(), planes.end(), [&](const auto& a, const auto& b) {
+    return a.height_at(c) < b.height_at(c);
+  });
+  auto highest = std::max_element(planes.begin(), planes.end(), [&](const auto& a, const auto& b) {
+    return a.height_at(c) < b.height_at(c);
+  });
+  const double gap = highest->height_at(c) - lowest->height_at(c);
+  if (gap < p.min_room_height) {
+    std::ostringstream m;
+    m << "found no floor and ceiling pair: the horizontal planes span only " << gap
+      << " m (need a floor and a ceiling at least " << p.min_room_height << " m apart)";
+    throw PreprocessError(m.str());
+  }
+  // Level by the floor: its normal refined by a least-squares fit to all its
+  // inliers in the full cloud (RANSAC saw a subset only).
+  const Eigen::Vector3d n = refine_normal(input, *lowest, p.ransac_distance);
+  r.normal_input = n;
+  r.alpha_deg = std::atan(n.x() / n.z()) * 180.0 / M_PI;  // Eq 1
+  r.beta_deg = std::atan(n.y() / n.z()) * 180.0 / M_PI;
+  const Eigen::Quaterniond level = Eigen::Quaterniond::FromTwoVectors(n, Eigen::Vector3d::UnitZ());
+
+  // Rotate, then find both peaks of the z histogram near the planes' heights.
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = level.toRotationMatrix();
+  Cloud rotated;
+  pcl::transformPointCloud(input, rotated, T.matrix().cast<float>());
+  std::vector<float> z(rotated.size());
+  for (std::size_t i = 0; i < rotated.size(); ++i) z[i] = rotated[i].z;
+  const Eigen::Vector3d on_floor = T * Eigen::Vector3d(c.x(), c.y(), lowest->height_at(c));
+  const Eigen::Vector3d on_ceiling = T * Eigen::Vector3d(c.x(), c.y(), highest->height_at(c));
+  r.floor = fit_peak(z, on_floor.z(), p);
+  r.ceiling = fit_peak(z, on_ceiling.z(), p);
+  r.floor.plane_inliers = lowest->inliers;
+  r.ceiling.plane_inliers = highest->inliers;
+
+  // Floor to z = 0.
+  T.pretranslate(Eigen::Vector3d(0, 0, -r.floor.center));
+  r.transform = T;
+  r.ceiling.center -= r.floor.center;
+  r.floor.center = 0;
+  r.ceiling_height = r.ceiling.center;
+
+  Cloud::Ptr cut(new Cloud);
+  cut->reserve(rotated.size());
+  const double zf = p.sigma_factor * r.floor.sigma, zc = p.sigma_factor * r.ceiling.sigma;
+  for (const auto& q : rotated) {
+    const pcl::PointXYZ v(q.x, q.y, float(double(q.z) + T.translation().z()));
+    if (std::fabs(v.z - r.floor.center) <= zf) {
+      ++r.floor.removed;
+    } else if (std::fabs(v.z - r.ceiling.center) <= zc) {
+      ++r.ceiling.removed;
+    } else {
+      cut->push_back(v);
+    }
+  }
+  r.after_cut = cut->size();
+
+  // Decimation: a fixed spacing, or the spacing that gives about the target count.
+  double spacing = p.min_spacing;
+  if (p.target_points > 0 && cut->size() > p.target_points) {
+    double lo = 0.0, hi = 0.2;
+    for (int it = 0; it < 12; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      if (decimate(*cut, mid)->size() > p.target_points)
+        lo = mid;
+      else
+        hi = mid;
+    }
+    spacing = std::max(spacing, hi);
+  }
+  r.cloud = spacing > 0 ? decimate(*cut, spacing) : cut;
+  r.decimation_spacing = spacing;
+  r.output_points = r.cloud->size();
+  return r;
+}
+
+}  // namespace semioctree

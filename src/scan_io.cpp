@@ -1,0 +1,267 @@
+#include "semioctree/scan_io.h"
+
+#include <pcl/common/transforms.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/io/ply_io.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+namespace semioctree {
+
+namespace {
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+
+bool finite(const pcl::PointXYZ& p) {
+  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+}
+
+// Drops NaN/Inf points in place; returns how many.
+std::size_t drop_invalid(Cloud& cloud) {
+  const std::size_t before = cloud.size();
+  cloud.erase(std::remove_if(cloud.begin(), cloud.end(), [](const pcl::PointXYZ& p) { return !finite(p); }),
+              cloud.end());
+  cloud.width = std::uint32_t(cloud.size());
+  cloud.height = 1;
+  cloud.is_dense = true;
+  return before - cloud.size();
+}
+
+void require_file(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw ScanReadError(path + ": no such file");
+}
+
+// PCL's PCD reader trusts its header (a junk or truncated file can crash it):
+// check the header and that the data is all there before PCL reads it.
+void check_pcd(const std::string& path) {
+  pcl::PCDReader reader;
+  pcl::PCLPointCloud2 header;
+  Eigen::Vector4f origin;
+  Eigen::Quaternionf orientation;
+  int version = 0, data_type = 0;
+  unsigned int data_idx = 0;
+  if (reader.readHeader(path, header, origin, orientation, version, data_type, data_idx) < 0)
+    throw ScanReadError(path + ": not a readable PCD file (bad header)");
+  const std::size_t n = std::size_t(header.width) * header.height;
+  if (n == 0) throw ScanReadError(path + ": PCD file holds no points");
+  bool x = false, y = false, z = false;
+  for (const auto& f : header.fields) {
+    x |= f.name == "x";
+    y |= f.name == "y";
+    z |= f.name == "z";
+  }
+  if (!(x && y && z)) throw ScanReadError(path + ": PCD file has no x, y, z fields");
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec || size < data_idx) throw ScanReadError(path + ": PCD file is truncated");
+  const std::uint64_t available = size - data_idx;
+  if (data_type == 1 && available < std::uint64_t(n) * header.point_step)  // binary
+    throw ScanReadError(path + ": PCD file is truncated (" + std::to_string(available) + " of " +
+                        std::to_string(std::uint64_t(n) * header.point_step) + " data bytes)");
+  if (data_type == 2) {  // binary_compressed: two uint32 sizes, then the compressed block
+    std::ifstream f(path, std::ios::binary);
+    f.seekg(std::streamoff(data_idx));
+    std::uint32_t sizes[2] = {0, 0};
+    if (!f.read(reinterpret_cast<char*>(sizes), sizeof(sizes)) || available < 8 + std::uint64_t(sizes[0]) ||
+        sizes[1] != std::uint64_t(n) * header.point_step)
+      throw ScanReadError(path + ": PCD file is truncated or corrupted (compressed block)");
+  }
+}
+
+Scan read_pcl(const std::string& path, bool pcd) {
+  require_file(path);
+  if (pcd) check_pcd(path);
+  Scan scan;
+  scan.points.reset(new Cloud);
+  scan.source = path;
+  const int rc = pcd ? pcl::io::loadPCDFile(path, *scan.points) : pcl::io::loadPLYFile(path, *scan.points);
+  if (rc < 0) throw ScanReadError(path + ": not a readable " + (pcd ? "PCD" : "PLY") + " point cloud");
+  scan.invalid_dropped = drop_invalid(*scan.points);
+  if (scan.points->empty()) throw ScanReadError(path + ": holds no valid points");
+  return scan;
+}
+
+// Splits a line into numbers (spaces, tabs or commas); false if any token is not a number.
+bool parse_numbers(const std::string& line, std::vector<double>& out) {
+  out.clear();
+  std::size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && (std::isspace(static_cast<unsigned char>(line[i])) || line[i] == ','))
+      ++i;
+    if (i >= line.size()) break;
+    const char* start = line.c_str() + i;
+    char* end = nullptr;
+    const double v = std::strtod(start, &end);
+    if (end == start) return false;
+    out.push_back(v);
+    i += std::size_t(end - start);
+  }
+  return true;
+}
+
+Scan read_xyz(const std::string& path) {
+  require_file(path);
+  std::ifstream f(path);
+  if (!f) throw ScanReadError(path + ": cannot open");
+  Scan scan;
+  scan.points.reset(new Cloud);
+  scan.source = path;
+  std::string line;
+  std::vector<double> v;
+  std::size_t lineno = 0;
+  while (std::getline(f, line)) {
+    ++lineno;
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#' || line[first] == '/') continue;
+    if (!parse_numbers(line, v) || v.size() < 3)
+      throw ScanReadError(path + ":" + std::to_string(lineno) +
+                          ": expected 'x y z [...]', got '" + line.substr(0, 60) + "'");
+    const pcl::PointXYZ p{float(v[0]), float(v[1]), float(v[2])};
+    if (finite(p))
+      scan.points->push_back(p);
+    else
+      ++scan.invalid_dropped;
+  }
+  if (scan.points->empty()) throw ScanReadError(path + ": holds no valid points");
+  return scan;
+}
+
+std::vector<Scan> read_ptx(const std::string& path) {
+  require_file(path);
+  std::ifstream f(path);
+  if (!f) throw ScanReadError(path + ": cannot open");
+  std::vector<Scan> scans;
+  std::string line;
+  std::vector<double> v;
+  std::size_t lineno = 0;
+  auto next_numbers = [&](std::size_t want, const char* what) {
+    if (!std::getline(f, line))
+      throw ScanReadError(path + ":" + std::to_string(lineno + 1) + ": file ends, expected " + what);
+    ++lineno;
+    if (!parse_numbers(line, v) || v.size() < want)
+      throw ScanReadError(path + ":" + std::to_string(lineno) + ": expected " + what + ", got '" +
+                          line.substr(0, 60) + "'");
+  };
+  while (true) {
+    // Skip blank lines between scans; stop at the end of the file.
+    std::streampos at = f.tellg();
+    bool more = false;
+    while (std::getline(f, line)) {
+      if (line.find_first_not_of(" \t\r") != std::string::npos) {
+        more = true;
+        break;
+      }
+      ++lineno;
+      at = f.tellg();
+    }
+    if (!more) break;
+    f.clear();
+    f.seekg(at);
+    next_numbers(1, "the column count");
+    const double cols = v[0];
+    next_numbers(1, "the row count");
+    const double rows = v[0];
+    if (!(cols >= 1 && rows >= 1 && cols * rows < 1e9))
+      throw ScanReadError(path + ":" + std::to_string(lineno) + ": bad scan size " +
+                          std::to_string(cols) + " x " + std::to_string(rows));
+    for (int i = 0; i < 4; ++i) next_numbers(3, "a scanner position/axis line (3 numbers)");
+    Eigen::Matrix4d m;
+    for (int r = 0; r < 4; ++r) {
+      next_numbers(4, "a transformation matrix row (4 numbers)");
+      for (int c = 0; c < 4; ++c) m(r, c) = v[std::size_t(c)];
+    }
+    Scan scan;
+    scan.points.reset(new Cloud);
+    scan.source = path + "#" + std::to_string(scans.size());
+    // PTX stores the matrix transposed: translation in the last row.
+    scan.pose.scanner_to_survey.matrix() = m.transpose();
+    const std::size_t n = std::size_t(cols) * std::size_t(rows);
+    scan.points->reserve(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      next_numbers(3, "a point 'x y z [intensity [r g b]]'");
+      const pcl::PointXYZ p{float(v[0]), float(v[1]), float(v[2])};
+      // (0, 0, 0) marks a direction with no return.
+      if (!finite(p) || (v[0] == 0 && v[1] == 0 && v[2] == 0))
+        ++scan.invalid_dropped;
+      else
+        scan.points->push_back(p);
+    }
+    scans.push_back(std::move(scan));
+  }
+  if (scans.empty()) throw ScanReadError(path + ": holds no scan");
+  return scans;
+}
+
+}  // namespace
+
+ScanPose ScanPose::from_xyz_yaw(double x, double y, double z, double yaw_deg) {
+  ScanPose p;
+  p.scanner_to_survey = Eigen::Translation3d(x, y, z) *
+                        Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ());
+  return p;
+}
+
+double ScanPose::yaw_deg() const {
+  const Eigen::Vector3d x_axis = scanner_to_survey.linear() * Eigen::Vector3d::UnitX();
+  return std::atan2(x_axis.y(), x_axis.x()) * 180.0 / M_PI;
+}
+
+std::vector<Scan> read_scans(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  if (ext == ".pcd") return {read_pcl(path, true)};
+  if (ext == ".ply") return {read_pcl(path, false)};
+  if (ext == ".xyz" || ext == ".txt" || ext == ".asc" || ext == ".pts") return {read_xyz(path)};
+  if (ext == ".ptx") return read_ptx(path);
+  throw ScanReadError(path + ": unknown point cloud format '" + ext +
+                      "' (expected .pcd, .ply, .xyz/.txt/.asc or .ptx)");
+}
+
+ScanPose parse_pose(const std::string& text) {
+  std::vector<double> v;
+  if (!parse_numbers(text, v) || v.size() < 3 || v.size() > 4)
+    throw std::invalid_argument("pose '" + text + "': expected X,Y,Z or X,Y,Z,YAW_DEG");
+  for (double x : v)
+    if (!std::isfinite(x)) throw std::invalid_argument("pose '" + text + "': not a finite number");
+  return ScanPose::from_xyz_yaw(v[0], v[1], v[2], v.size() == 4 ? v[3] : 0.0);
+}
+
+ScanPose read_pose_json(const std::string& path) {
+  require_file(path);
+  std::ifstream f(path);
+  nlohmann::json j;
+  try {
+    f >> j;
+  } catch (const std::exception& e) {
+    throw ScanReadError(path + ": not valid JSON: " + e.what());
+  }
+  auto num = [&](const char* key, bool required) {
+    if (!j.contains(key)) {
+      if (required) throw ScanReadError(path + ": " + key + ": missing");
+      return 0.0;
+    }
+    if (!j[key].is_number()) throw ScanReadError(path + ": " + key + ": must be a number");
+    return j[key].get<double>();
+  };
+  if (!j.is_object()) throw ScanReadError(path + ": expected an object {\"x\":..,\"y\":..,\"z\":..,\"yaw_deg\":..}");
+  return ScanPose::from_xyz_yaw(num("x", true), num("y", true), num("z", true), num("yaw_deg", false));
+}
+
+Cloud::Ptr to_survey_frame(const Scan& scan) {
+  Cloud::Ptr out(new Cloud);
+  pcl::transformPointCloud(*scan.points, *out, scan.pose.scanner_to_survey.matrix().cast<float>());
+  return out;
+}
+
+}  // namespace semioctree

@@ -1,0 +1,10 @@
+# Tests of the pipeline stages (include/semioctree/, src/).
+foreach(t test_preprocess test_scan_io test_discretize)
+  if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/${t}.cpp)
+    semioctree_add_test(${t} SOURCES ${t}.cpp LIBS semioctree)
+    target_include_directories(${t} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+  endif()
+endforeach()
+if(TARGET test_discretize)
+  target_link_libraries(test_discretize PRIVATE PNG::PNG)
+endif()

@@ -1,0 +1,59 @@
+// Point clouds with a known answer, built directly (no scanner).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <random>
+
+#include "semioctree/scan_io.h"
+
+namespace semioctree::testing {
+
+// A w × d × h room: points on floor (z = 0), ceiling (z = h), four walls and a
+// box (a table), with Gaussian noise, seen from (sx, sy, scanner_height).
+// Points are in the scanner frame: the room is shifted by −scanner position.
+inline Cloud::Ptr synthetic_room(double w = 8.0, double d = 6.0, double h = 3.0, double spacing = 0.03,
+                                 double noise = 0.002, unsigned seed = 1, double sx = 3.0,
+                                 double sy = 2.5, double scanner_height = 1.5) {
+  Cloud::Ptr c(new Cloud);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n(0.0, noise);
+  auto add = [&](double x, double y, double z) {
+    c->push_back(pcl::PointXYZ{float(x - sx + n(rng)), float(y - sy + n(rng)),
+                               float(z - scanner_height + n(rng))});
+  };
+  for (double x = 0; x <= w; x += spacing)
+    for (double y = 0; y <= d; y += spacing) {
+      add(x, y, 0.0);
+      add(x, y, h);
+    }
+  for (double z = spacing; z < h; z += spacing) {
+    for (double x = 0; x <= w; x += spacing) {
+      add(x, 0.0, z);
+      add(x, d, z);
+    }
+    for (double y = 0; y <= d; y += spacing) {
+      add(0.0, y, z);
+      add(w, y, z);
+    }
+  }
+  // A 1.6 × 0.8 table top at 0.75 m and its sides.
+  for (double x = 5.0; x <= 6.6; x += spacing)
+    for (double y = 1.0; y <= 1.8; y += spacing) add(x, y, 0.75);
+  return c;
+}
+
+// Rotation Rot(x, β)·Rot(y, α) of paper Eq 2, applied to a cloud.
+inline Cloud::Ptr tilt(const Cloud& in, double alpha_deg, double beta_deg) {
+  const Eigen::Matrix3d R =
+      (Eigen::AngleAxisd(beta_deg * M_PI / 180, Eigen::Vector3d::UnitX()) *
+       Eigen::AngleAxisd(alpha_deg * M_PI / 180, Eigen::Vector3d::UnitY()))
+          .toRotationMatrix();
+  Cloud::Ptr out(new Cloud);
+  for (const auto& p : in) {
+    const Eigen::Vector3d q = R * Eigen::Vector3d(p.x, p.y, p.z);
+    out->push_back(pcl::PointXYZ{float(q.x()), float(q.y()), float(q.z())});
+  }
+  return out;
+}
+
+}  // namespace semioctree::testing

@@ -1,0 +1,131 @@
+// Preprocessing (paper 2.1): levelling by RANSAC floor/ceiling planes (Eq 1-2),
+// floor to z = 0, z-histogram floor/ceiling removal at 2σ, decimation.
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+
+#include <pcl/common/centroid.h>
+#include <pcl/common/transforms.h>
+
+#include "semioctree/preprocess.h"
+#include "support/synthetic_clouds.h"
+
+namespace semioctree {
+namespace {
+
+// Eq 1 angles of the normal of the tilted floor.
+std::pair<double, double> eq1_angles(double alpha_deg, double beta_deg) {
+  const Eigen::Matrix3d R =
+      (Eigen::AngleAxisd(beta_deg * M_PI / 180, Eigen::Vector3d::UnitX()) *
+       Eigen::AngleAxisd(alpha_deg * M_PI / 180, Eigen::Vector3d::UnitY()))
+          .toRotationMatrix();
+  const Eigen::Vector3d n = R * Eigen::Vector3d::UnitZ();
+  return {std::atan(n.x() / n.z()) * 180 / M_PI, std::atan(n.y() / n.z()) * 180 / M_PI};
+}
+
+TEST(Preprocess, RecoversKnownTiltWithinATenthOfADegree) {
+  const auto room = testing::synthetic_room();
+  for (const auto& [a, b] : {std::pair{3.0, -2.0}, std::pair{-7.5, 4.0}, std::pair{0.0, 0.0},
+                             std::pair{1.2, 9.0}}) {
+    const auto tilted = testing::tilt(*room, a, b);
+    const PreprocessResult r = preprocess(*tilted);
+    const auto [want_a, want_b] = eq1_angles(a, b);
+    EXPECT_NEAR(r.alpha_deg, want_a, 0.1) << "alpha for tilt " << a << ", " << b;
+    EXPECT_NEAR(r.beta_deg, want_b, 0.1) << "beta for tilt " << a << ", " << b;
+    EXPECT_NEAR(r.ceiling_height, 3.0, 0.01);
+    // The levelled floor is flat and at 0: transform the original floor points.
+    const Eigen::Matrix3d R =
+        (Eigen::AngleAxisd(b * M_PI / 180, Eigen::Vector3d::UnitX()) *
+         Eigen::AngleAxisd(a * M_PI / 180, Eigen::Vector3d::UnitY()))
+            .toRotationMatrix();
+    for (const Eigen::Vector3d& corner : {Eigen::Vector3d(-3, -2.5, -1.5), Eigen::Vector3d(5, 3.5, -1.5)}) {
+      const Eigen::Vector3d levelled = r.transform * (R * corner);
+      EXPECT_NEAR(levelled.z(), 0.0, 0.01) << "floor corner";
+    }
+  }
+}
+
+TEST(Preprocess, RemovesFloorAndCeilingWithinTwoSigma) {
+  const auto room = testing::synthetic_room(8, 6, 3, 0.03, 0.003);
+  const PreprocessResult r = preprocess(*room);
+  EXPECT_NEAR(r.floor.sigma, 0.003, 0.001);
+  EXPECT_NEAR(r.ceiling.sigma, 0.003, 0.001);
+  // Floor and ceiling each hold (8/0.03+1)·(6/0.03+1) points; 2σ keeps ~95 % of a Gaussian.
+  const double per_plane = (std::floor(8 / 0.03) + 1) * (std::floor(6 / 0.03) + 1);
+  EXPECT_NEAR(double(r.floor.removed), 0.954 * per_plane, 0.03 * per_plane);
+  EXPECT_NEAR(double(r.ceiling.removed), 0.954 * per_plane, 0.03 * per_plane);
+  EXPECT_EQ(r.after_cut, r.input_points - r.floor.removed - r.ceiling.removed);
+  // The table top at 0.75 m and the walls survive.
+  std::size_t table = 0;
+  for (const auto& p : *r.cloud) table += std::fabs(p.z - 0.75) < 0.01;
+  EXPECT_GT(table, 1000u);
+  for (const auto& p : *r.cloud) {
+    EXPECT_FALSE(std::fabs(p.z) <= 2 * r.floor.sigma);
+    EXPECT_FALSE(std::fabs(p.z - r.ceiling_height) <= 2 * r.ceiling.sigma);
+  }
+}
+
+TEST(Preprocess, DecimatesToSpacingOrTargetCount) {
+  const auto room = testing::synthetic_room(8, 6, 3, 0.01, 0.002);
+  PreprocessParams p;
+  p.target_points = 50000;
+  const PreprocessResult r = preprocess(*room, p);
+  EXPECT_GT(r.after_cut, 200000u);
+  EXPECT_LE(r.output_points, 50000u);
+  EXPECT_GE(r.output_points, 35000u);
+  EXPECT_GT(r.decimation_spacing, 0.0);
+  // Spacing: no two kept points share a cell of that size.
+  const auto d = decimate(*r.cloud, 0.05);
+  EXPECT_LT(d->size(), r.cloud->size());
+}
+
+TEST(Preprocess, ClearErrors) {
+  Cloud few;
+  for (int i = 0; i < 10; ++i) few.push_back(pcl::PointXYZ{float(i), 0.f, 0.f});
+  EXPECT_THROW(preprocess(few), PreprocessError);
+  // Only a floor: no ceiling plane.
+  Cloud floor_only;
+  for (double x = 0; x < 5; x += 0.02)
+    for (double y = 0; y < 5; y += 0.02) floor_only.push_back(pcl::PointXYZ{float(x), float(y), -1.5f});
+  try {
+    preprocess(floor_only);
+    FAIL();
+  } catch (const PreprocessError& e) {
+    EXPECT_NE(std::string(e.what()).find("ceiling"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Preprocess, RealScanFloorCeilingAndLevel) {
+  const auto scans = read_scans(std::string(SEMIOCTREE_SHARED_DIR) + "/data/real/room_scan1.pcd");
+  ASSERT_EQ(scans.size(), 1u);
+  const PreprocessResult r = preprocess(*scans[0].points);
+  EXPECT_GT(r.floor.plane_inliers, 1000u);
+  EXPECT_GT(r.ceiling.plane_inliers, 1000u);
+  EXPECT_GT(r.ceiling_height, 2.0);
+  EXPECT_LT(r.ceiling_height, 5.0);
+  // The levelled floor is flat to under 0.5°: fit a plane to the points near z = 0.
+  Cloud floor;
+  {
+    Cloud levelled;
+    pcl::transformPointCloud(*scans[0].points, levelled, r.transform.matrix().cast<float>());
+    for (const auto& p : levelled)
+      if (std::fabs(p.z) < 0.03) floor.push_back(p);
+  }
+  ASSERT_GT(floor.size(), 1000u);
+  Eigen::Vector4f centroid;
+  Eigen::Matrix3f cov = Eigen::Matrix3f::Zero();
+  pcl::computeMeanAndCovarianceMatrix(floor, cov, centroid);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> es(cov);
+  const Eigen::Vector3f normal = es.eigenvectors().col(0);
+  const double tilt = std::acos(std::fabs(normal.z())) * 180 / M_PI;
+  EXPECT_LT(tilt, 0.5) << "levelled floor tilt";
+  RecordProperty("floor_tilt_deg", std::to_string(tilt));
+  std::printf("room_scan1: alpha %.3f°, beta %.3f°, ceiling %.3f m, floor σ %.4f, ceiling σ %.4f, "
+              "levelled floor tilt %.3f°, %zu → %zu points\n",
+              r.alpha_deg, r.beta_deg, r.ceiling_height, r.floor.sigma, r.ceiling.sigma, tilt,
+              r.input_points, r.output_points);
+}
+
+}  // namespace
+}  // namespace semioctree
