@@ -68,7 +68,7 @@ std::string fmt(const char* f, double v) {
 // Fig 15: octants against resolution, both methods, log-scale counts.
 void write_chart(const std::map<std::string, std::vector<const DiscretizationRun*>>& by_method,
                  const std::string& path) {
-  const int W = 900, H = 600, left = 110, right = 40, top = 60, bottom = 80;
+  const int W = 980, H = 600, left = 110, right = 130, top = 60, bottom = 80;
   Raster img(W, H);
   double lo = 1e300, hi = 0;
   std::vector<double> leaves;
@@ -114,8 +114,8 @@ void write_chart(const std::map<std::string, std::vector<const DiscretizationRun
       const std::string n = std::to_string(r->stats.total());
       img.text(x + 10, y - (m == "semioctree" ? -8 : 20), n, c);
     }
-    img.fill_rect(W - right - 200, ly, W - right - 180, ly + 14, c);
-    img.text(W - right - 170, ly, m, {0, 0, 0});
+    img.fill_rect(left + 30, ly, left + 50, ly + 14, c);
+    img.text(left + 60, ly, m, {0, 0, 0});
     ly += 24;
   }
   img.write_png(path);

@@ -93,7 +93,7 @@ Eigen::Vector3d refine_normal(const Cloud& cloud, const HorizontalPlane& plane, 
     if (std::fabs(plane.normal.dot(Eigen::Vector3d(q.x, q.y, q.z)) + plane.d) <= distance)
       near.push_back(q);
   if (near.size() < 10) return plane.normal;
-  Eigen::Matrix3f cov;
+  Eigen::Matrix3f cov = Eigen::Matrix3f::Zero();
   Eigen::Vector4f centroid;
   pcl::computeMeanAndCovarianceMatrix(near, cov, centroid);
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> es(cov);
@@ -229,18 +229,26 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
 
   // Decimation: a fixed spacing, or the spacing that gives about the target count.
   double spacing = p.min_spacing;
+  Cloud::Ptr decimated;
   if (p.target_points > 0 && cut->size() > p.target_points) {
-    double lo = 0.0, hi = 0.2;
-    for (int it = 0; it < 12; ++it) {
+    // Bisection on a log scale of the spacing (1 mm .. 0.5 m); stop within 3 %
+    // below the target. Each step is one UniformSampling pass.
+    double lo = std::log(0.001), hi = std::log(0.5);
+    for (int it = 0; it < 14; ++it) {
       const double mid = 0.5 * (lo + hi);
-      if (decimate(*cut, mid)->size() > p.target_points)
+      Cloud::Ptr d = decimate(*cut, std::max(spacing, std::exp(mid)));
+      if (d->size() > p.target_points) {
         lo = mid;
-      else
+      } else {
         hi = mid;
+        decimated = d;
+        if (d->size() >= p.target_points * 97 / 100) break;
+      }
     }
-    spacing = std::max(spacing, hi);
+    spacing = std::max(spacing, std::exp(hi));
   }
-  r.cloud = spacing > 0 ? decimate(*cut, spacing) : cut;
+  if (!decimated) decimated = spacing > 0 ? decimate(*cut, spacing) : cut;
+  r.cloud = decimated;
   r.decimation_spacing = spacing;
   r.output_points = r.cloud->size();
   return r;

@@ -6,7 +6,7 @@ endforeach()
 semioctree_add_bench(bench_traversal SOURCES bench_traversal.cpp LIBS octomap_ext)
 
 # The command-line tool (runs the built binary).
-semioctree_add_test(test_cli SOURCES test_cli.cpp LIBS octomap_ext)
+semioctree_add_test(test_cli SOURCES test_cli.cpp LIBS semioctree nlohmann_json::nlohmann_json)
 target_include_directories(test_cli PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
 target_compile_definitions(test_cli PRIVATE SEMIOCTREE_VERSION="${PROJECT_VERSION}")
 add_dependencies(test_cli semioctree_cli)

@@ -8,3 +8,9 @@ endforeach()
 if(TARGET test_discretize)
   target_link_libraries(test_discretize PRIVATE PNG::PNG)
 endif()
+
+# Benchmarks that need the synthetic scanner for their input.
+if(TARGET semioctree_sim)
+  semioctree_add_bench(bench_discretize SOURCES bench_discretize.cpp LIBS semioctree semioctree_sim)
+  target_compile_definitions(bench_discretize PRIVATE SEMIOCTREE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+endif()

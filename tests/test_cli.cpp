@@ -7,10 +7,16 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
+
+#include <pcl/io/pcd_io.h>
+
+#include <nlohmann/json.hpp>
 
 #include "semioctree/octomap_ext/file_io.h"
 #include "support/sample_trees.h"
+#include "support/synthetic_clouds.h"
 
 namespace semioctree {
 namespace {
@@ -108,6 +114,51 @@ TEST(Cli, BadInputGivesAClearErrorAndNonZeroExit) {
                             (dir / "x.ply").string());
   EXPECT_EQ(wrong.code, 1);
   EXPECT_NE(wrong.out.find("not a SemiOcTree"), std::string::npos) << wrong.out;
+}
+
+TEST(Cli, DiscretizeWritesEveryFile) {
+  const auto dir = testing::temp_dir("cli-disc");
+  pcl::io::savePCDFileBinary((dir / "room.pcd").string(), *testing::synthetic_room(6, 4, 2.8, 0.04));
+  const CliRun r = run_cli("discretize --cloud " + (dir / "room.pcd").string() +
+                           " --pose 3,2,1.5,0 --leaf 0.1 --coarse 0.8 --out " + (dir / "out").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  for (const char* f : {"semioctree.ot", "labels_color.ot", "occupancy.bt", "slice.png", "stats.json"})
+    EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
+  EXPECT_NE(r.out.find("preprocess:"), std::string::npos) << r.out;
+  const auto tree = read_semioctree_file((dir / "out" / "semioctree.ot").string());
+  EXPECT_EQ(tree->coarse_level(), 3u);
+  std::ifstream js(dir / "out" / "stats.json");
+  const auto j = nlohmann::json::parse(js);
+  EXPECT_EQ(j["octants"].get<std::uint64_t>(), tree->statistics().total());
+  EXPECT_GT(j["volume_percent"]["occupied"].get<double>(), 0.0);
+  // A bad coarse size is refused before anything is read.
+  const CliRun bad = run_cli("discretize --cloud " + (dir / "room.pcd").string() +
+                             " --leaf 0.1 --coarse 0.7 --out " + (dir / "x").string());
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.out.find("power of two"), std::string::npos) << bad.out;
+  const CliRun missing = run_cli("discretize --cloud " + (dir / "nope.pcd").string() + " --out x");
+  EXPECT_NE(missing.code, 0);
+}
+
+TEST(Cli, CompareWritesTablesAndChart) {
+  const auto dir = testing::temp_dir("cli-cmp");
+  pcl::io::savePCDFileBinary((dir / "room.pcd").string(), *testing::synthetic_room(6, 4, 2.8, 0.04));
+  const CliRun r = run_cli("compare --cloud " + (dir / "room.pcd").string() +
+                           " --leaves 0.4,0.2,0.1 --out " + (dir / "cmp").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  for (const char* f : {"comparison.json", "comparison.md", "fig15_octants.png", "slice_semioctree_0.1.png",
+                        "slice_homogeneous_0.1.png"})
+    EXPECT_TRUE(fs::exists(dir / "cmp" / f)) << f;
+  std::ifstream js(dir / "cmp" / "comparison.json");
+  const auto j = nlohmann::json::parse(js);
+  // Homogeneous over the same region at every resolution: each halving is ×8.
+  for (double f : j["table2"]["homogeneous"]["factors"]) EXPECT_DOUBLE_EQ(f, 8.0);
+  EXPECT_LT(j["table2"]["semioctree"]["average"].get<double>(), 6.0);
+  EXPECT_EQ(j["table1"].size(), 6u);
+  std::ifstream md(dir / "cmp" / "comparison.md");
+  std::stringstream mds;
+  mds << md.rdbuf();
+  EXPECT_NE(mds.str().find("Table 2"), std::string::npos);
 }
 
 }  // namespace

@@ -19,6 +19,10 @@ namespace semioctree {
 struct DiscretizeParams {
   double leaf = 0.05;    // r
   double coarse = 0.8;   // L = r·2^k
+  // The region covered is the cloud's bounds snapped outwards to multiples of
+  // this size (0: the coarse size). Comparing a homogeneous grid with a
+  // semioctree over the same region: give both the semioctree's L.
+  double extent_snap = 0.0;
 };
 
 struct DiscretizeReport {

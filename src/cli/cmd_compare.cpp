@@ -65,6 +65,7 @@ void add_compare_command(CLI::App& app) {
         DiscretizeParams p;
         p.leaf = leaf;
         p.coarse = std::string(method) == "homogeneous" ? leaf : o->coarse;
+        p.extent_snap = o->coarse;  // both methods cover the same region
         const auto t0 = std::chrono::steady_clock::now();
         const auto tree = discretize(*cloud.pre.cloud, cloud.pre.ceiling_height, p);
         tree->prune();

@@ -9,12 +9,17 @@
 #include "semioctree/discretize.h"
 #include "semioctree/figures.h"
 #include "semioctree/outputs.h"
+#ifdef SEMIOCTREE_HAVE_SIM
+#include "sim_input.h"
+#endif
 
 namespace semioctree::cli {
 
 void add_discretize_command(CLI::App& app) {
   struct Options {
     CloudInput input;
+    std::string scene;
+    std::uint64_t seed = 1;
     PreprocessParams pre;
     DiscretizeParams disc;
     std::string out;
@@ -26,9 +31,17 @@ void add_discretize_command(CLI::App& app) {
       "Preprocess a scan (level, cut floor and ceiling, decimate) and discretize it into a "
       "SemiOcTree (occupancy analysis). Writes semioctree.ot, labels_color.ot, occupancy.bt, "
       "slice.png and stats.json.");
-  cmd->add_option("--cloud", o->input.files, "point cloud: .pcd, .ply, .xyz/.txt or .ptx (repeat for several)")
-      ->required()
-      ->check(CLI::ExistingFile);
+  auto* cloud_opt =
+      cmd->add_option("--cloud", o->input.files, "point cloud: .pcd, .ply, .xyz/.txt or .ptx (repeat for several)")
+          ->check(CLI::ExistingFile);
+#ifdef SEMIOCTREE_HAVE_SIM
+  cmd->add_option("--scene", o->scene, "scene file: scan it from the robot's start with the synthetic scanner")
+      ->check(CLI::ExistingFile)
+      ->excludes(cloud_opt);
+  cmd->add_option("--seed", o->seed, "scanner noise seed (with --scene)")->capture_default_str();
+#else
+  (void)cloud_opt;
+#endif
   cmd->add_option("--pose", o->input.poses,
                   "scanner pose X,Y,Z[,YAW_DEG] in the survey frame, one per --cloud (default: the "
                   "origin, or the pose stored in a PTX file)");
@@ -44,7 +57,14 @@ void add_discretize_command(CLI::App& app) {
   add_preprocess_options(*cmd, o->pre);
   cmd->callback([o] {
     SemiOcTree::coarse_level_for(o->disc.leaf, o->disc.coarse);  // fail before reading anything
-    const PreparedCloud cloud = prepare_clouds(o->input, o->pre);
+    if (o->input.files.empty() && o->scene.empty())
+      throw std::invalid_argument("discretize: give --cloud FILE or --scene FILE");
+    PreparedCloud cloud;
+#ifdef SEMIOCTREE_HAVE_SIM
+    if (!o->scene.empty()) cloud = scan_scene_at_start(o->scene, o->seed, o->pre);
+    else
+#endif
+      cloud = prepare_clouds(o->input, o->pre);
     const auto t0 = std::chrono::steady_clock::now();
     DiscretizeReport rep;
     const auto tree = discretize(*cloud.pre.cloud, cloud.pre.ceiling_height, o->disc, &rep);
@@ -64,7 +84,7 @@ void add_discretize_command(CLI::App& app) {
     slice.height = o->slice_height >= 0 ? o->slice_height
                                         : (cloud.scanners.empty() ? 1.5 : cloud.scanners.front().z);
     slice.scans = cloud.scanners;
-    slice.title = std::filesystem::path(o->input.files.front()).filename().string();
+    slice.title = std::filesystem::path(o->scene.empty() ? o->input.files.front() : o->scene).filename().string();
     write_map_files(*tree, o->out, slice);
     write_run_json(run, (std::filesystem::path(o->out) / "stats.json").string());
     std::printf("wrote %s/{semioctree.ot, labels_color.ot, occupancy.bt, slice.png, stats.json}\n",
