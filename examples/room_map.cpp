@@ -4,7 +4,6 @@
 //
 //   room_map --out DIR [--leaf 0.05] [--coarse 0.8]
 #include <CLI/CLI.hpp>
-
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -27,20 +26,23 @@ void add_box_surface(SemiOcTree& t, Point3 lo, Point3 hi) {
         const bool surface = x < lo.x + r || x > hi.x - r || y < lo.y + r || y > hi.y - r ||
                              z < lo.z + r || z > hi.z - r;
         octomap::OcTreeKey key;
-        if (surface && t.key_of({x, y, z}, key)) t.set_label(key, t.coarse_level(), Label::kOccupied);
+        if (surface && t.key_of({x, y, z}, key))
+          t.set_label(key, t.coarse_level(), Label::kOccupied);
       }
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Build a SemiOcTree of a room by hand, mark what one scanner position cannot see, "
-               "and export it (.ot, ColorOcTree .ot, .bt, PLY)."};
+  CLI::App app{
+      "Build a SemiOcTree of a room by hand, mark what one scanner position cannot see, "
+      "and export it (.ot, ColorOcTree .ot, .bt, PLY)."};
   std::string out = "survey_out";
   double leaf = 0.05, coarse = 0.8;
   app.add_option("--out", out, "output directory")->capture_default_str();
   app.add_option("--leaf", leaf, "leaf size r in metres")->capture_default_str();
-  app.add_option("--coarse", coarse, "coarse voxel size L = r * 2^k in metres")->capture_default_str();
+  app.add_option("--coarse", coarse, "coarse voxel size L = r * 2^k in metres")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   try {
     const auto t0 = std::chrono::steady_clock::now();
@@ -92,8 +94,9 @@ int main(int argc, char** argv) {
     write_tree_file(*to_color_octree(tree), (fs::path(out) / "labels_color.ot").string());
     write_binary_file(*to_occupancy_octree(tree), (fs::path(out) / "occupancy.bt").string());
     const std::size_t n = write_octant_ply(tree, (fs::path(out) / "octants.ply").string());
-    std::printf("wrote %s/{semioctree.ot, labels_color.ot, occupancy.bt, octants.ply (%zu octants)}\n",
-                out.c_str(), n);
+    std::printf(
+        "wrote %s/{semioctree.ot, labels_color.ot, occupancy.bt, octants.ply (%zu octants)}\n",
+        out.c_str(), n);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "room_map: error: %s\n", e.what());
     return 1;

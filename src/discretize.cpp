@@ -34,16 +34,17 @@ std::unique_ptr<SemiOcTree> discretize(const Cloud& cloud, double ceiling_height
   const double below_ceiling = std::nextafter(ceiling_height, 0.0);
   // Snap the bounds outwards to the extent grid, then to coarse voxels.
   const double snap = params.extent_snap > 0 ? params.extent_snap : tree->coarse_size();
+  // (Half a leaf inside the snapped faces, so rounding cannot reach past them.)
+  const double inset = 0.5 * tree->leaf_size();
   if (params.extent_snap > 0) {
     for (int a = 0; a < 2; ++a) {
-      lo[a] = std::floor(lo[a] / snap) * snap;
-      hi[a] = std::nextafter((std::floor(hi[a] / snap) + 1) * snap, lo[a]);
+      lo[a] = std::floor(lo[a] / snap) * snap + inset;
+      hi[a] = (std::floor(hi[a] / snap) + 1) * snap - inset;
     }
   }
-  const double top = params.extent_snap > 0
-                         ? std::nextafter(std::ceil(below_ceiling / snap) * snap, 0.0)
-                         : below_ceiling;
-  if (!tree->coarse_index_of({lo[0], lo[1], 0.0}, cmin) ||
+  const double top =
+      params.extent_snap > 0 ? std::ceil(below_ceiling / snap) * snap - inset : below_ceiling;
+  if (!tree->coarse_index_of({lo[0], lo[1], params.extent_snap > 0 ? inset : 0.0}, cmin) ||
       !tree->coarse_index_of({hi[0], hi[1], top}, cmax))
     throw std::invalid_argument("the cloud lies outside OctoMap's key range at this leaf size");
   // The coarse grid over the room: every voxel an unsplit `empty` candidate.

@@ -35,7 +35,8 @@ json run_json(const DiscretizationRun& r) {
     lv["octants"] = r.stats.at_level(l);
     json by_label = json::object();
     for (int k = 0; k < kLabelCount; ++k)
-      if (r.stats.count[l][std::size_t(k)]) by_label[std::string(kLabelNames[std::size_t(k)])] = r.stats.count[l][std::size_t(k)];
+      if (r.stats.count[l][std::size_t(k)])
+        by_label[std::string(kLabelNames[std::size_t(k)])] = r.stats.count[l][std::size_t(k)];
     lv["by_label"] = by_label;
     by_level.push_back(lv);
   }
@@ -76,23 +77,28 @@ void write_chart(const std::map<std::string, std::vector<const DiscretizationRun
     for (const auto* r : runs) {
       lo = std::min(lo, double(r->stats.total()));
       hi = std::max(hi, double(r->stats.total()));
-      if (std::find(leaves.begin(), leaves.end(), r->leaf) == leaves.end()) leaves.push_back(r->leaf);
+      if (std::find(leaves.begin(), leaves.end(), r->leaf) == leaves.end())
+        leaves.push_back(r->leaf);
     }
   std::sort(leaves.rbegin(), leaves.rend());
-  const double ylo = std::floor(std::log10(std::max(lo, 1.0))), yhi = std::ceil(std::log10(std::max(hi, 10.0)));
+  const double ylo = std::floor(std::log10(std::max(lo, 1.0))),
+               yhi = std::ceil(std::log10(std::max(hi, 10.0)));
   auto X = [&](double leaf) {
     const auto i = std::find(leaves.begin(), leaves.end(), leaf) - leaves.begin();
-    return left + int((W - left - right) * (leaves.size() > 1 ? double(i) / double(leaves.size() - 1) : 0.5));
+    return left + int((W - left - right) *
+                      (leaves.size() > 1 ? double(i) / double(leaves.size() - 1) : 0.5));
   };
   auto Y = [&](double count) {
-    return top + int((H - top - bottom) * (1.0 - (std::log10(std::max(count, 1.0)) - ylo) / (yhi - ylo)));
+    return top +
+           int((H - top - bottom) * (1.0 - (std::log10(std::max(count, 1.0)) - ylo) / (yhi - ylo)));
   };
   img.line(left, top, left, H - bottom, {0, 0, 0});
   img.line(left, H - bottom, W - right, H - bottom, {0, 0, 0});
   for (double e = ylo; e <= yhi; e += 1) {
     const int y = Y(std::pow(10.0, e));
     img.line(left - 6, y, W - right, y, {210, 210, 210});
-    img.text(left - 12 - Raster::text_width("1e" + std::to_string(int(e))), y - 6, "1e" + std::to_string(int(e)), {0, 0, 0});
+    img.text(left - 12 - Raster::text_width("1e" + std::to_string(int(e))), y - 6,
+             "1e" + std::to_string(int(e)), {0, 0, 0});
   }
   for (double leaf : leaves) {
     const std::string t = fmt("%g m", leaf);
@@ -101,7 +107,8 @@ void write_chart(const std::map<std::string, std::vector<const DiscretizationRun
   }
   img.text(left, 18, "Fig 15: octants needed for a resolution (log scale)", {0, 0, 0});
   img.text(W / 2 - 80, H - 36, "leaf size (resolution)", {0, 0, 0});
-  const std::map<std::string, Rgb> colors = {{"homogeneous", {200, 60, 0}}, {"semioctree", {0, 80, 200}}};
+  const std::map<std::string, Rgb> colors = {{"homogeneous", {200, 60, 0}},
+                                             {"semioctree", {0, 80, 200}}};
   int ly = top + 10;
   for (const auto& [m, runs] : by_method) {
     const Rgb c = colors.count(m) ? colors.at(m) : Rgb{0, 0, 0};
@@ -139,7 +146,8 @@ void write_run_json(const DiscretizationRun& run, const std::string& path) {
 std::vector<double> increment_factors(const std::vector<DiscretizationRun>& runs) {
   std::vector<double> f;
   for (std::size_t i = 0; i + 1 < runs.size(); ++i)
-    f.push_back(double(runs[i + 1].stats.total()) / double(std::max<std::uint64_t>(1, runs[i].stats.total())));
+    f.push_back(double(runs[i + 1].stats.total()) /
+                double(std::max<std::uint64_t>(1, runs[i].stats.total())));
   return f;
 }
 
@@ -165,7 +173,9 @@ void write_comparison(const std::vector<DiscretizationRun>& runs, const std::str
       row["method"] = m;
       row["leaf"] = r.leaf;
       row["coarse"] = r.coarse;
-      const std::string size = m == "homogeneous" ? fmt("%gm", r.leaf) : fmt("%gm", r.coarse) + " to " + fmt("%gm", r.leaf);
+      const std::string size = m == "homogeneous"
+                                   ? fmt("%gm", r.leaf)
+                                   : fmt("%gm", r.coarse) + " to " + fmt("%gm", r.leaf);
       md << "| " << m << " | " << size;
       for (Label l : kTableLabels) {
         row["volume_percent"][std::string(label_name(l))] = volume_percent(r.stats, l);
@@ -176,7 +186,8 @@ void write_comparison(const std::vector<DiscretizationRun>& runs, const std::str
     }
   md << "\n## Table 2. Increment factor per halving of the resolution\n\n| method |";
   const auto& any = by_method.begin()->second;
-  for (std::size_t i = 0; i + 1 < any.size(); ++i) md << " " << fmt("%g", any[i].leaf) << " → " << fmt("%g m", any[i + 1].leaf) << " |";
+  for (std::size_t i = 0; i + 1 < any.size(); ++i)
+    md << " " << fmt("%g", any[i].leaf) << " → " << fmt("%g m", any[i + 1].leaf) << " |";
   md << " average |\n|---|";
   for (std::size_t i = 0; i + 1 < any.size(); ++i) md << "---|";
   md << "---|\n";
@@ -203,15 +214,17 @@ void write_comparison(const std::vector<DiscretizationRun>& runs, const std::str
       const double c = i < v.size() ? double(v[i].stats.total()) : 0;
       counts.push_back(c);
       md << " " << std::uint64_t(c) << " |";
-      fig15[m].push_back({{"leaf", i < v.size() ? v[i].leaf : 0}, {"octants", std::uint64_t(c)},
+      fig15[m].push_back({{"leaf", i < v.size() ? v[i].leaf : 0},
+                          {"octants", std::uint64_t(c)},
                           {"memory_bytes", i < v.size() ? v[i].memory_bytes : 0},
                           {"seconds", i < v.size() ? v[i].seconds : 0}});
     }
-    const double ratio = by_method.count("homogeneous") && by_method.count("semioctree") && i < by_method["semioctree"].size() &&
-                                 i < by_method["homogeneous"].size()
-                             ? double(by_method["homogeneous"][i].stats.total()) /
-                                   double(std::max<std::uint64_t>(1, by_method["semioctree"][i].stats.total()))
-                             : 0.0;
+    const double ratio =
+        by_method.count("homogeneous") && by_method.count("semioctree") &&
+                i < by_method["semioctree"].size() && i < by_method["homogeneous"].size()
+            ? double(by_method["homogeneous"][i].stats.total()) /
+                  double(std::max<std::uint64_t>(1, by_method["semioctree"][i].stats.total()))
+            : 0.0;
     md << " " << fmt("%.2f", ratio) << " |\n";
   }
   j["table1"] = table1;

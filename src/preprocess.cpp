@@ -21,9 +21,9 @@ namespace semioctree {
 namespace {
 
 struct HorizontalPlane {
-  Eigen::Vector3d normal;  // oriented to +z
-  double d = 0;            // normal·p + d = 0
-  std::size_t inliers = 0; // on the full cloud
+  Eigen::Vector3d normal;   // oriented to +z
+  double d = 0;             // normal·p + d = 0
+  std::size_t inliers = 0;  // on the full cloud
   double height_at(const Eigen::Vector2d& xy) const {
     return -(d + normal.x() * xy.x() + normal.y() * xy.y()) / normal.z();
   }
@@ -60,7 +60,8 @@ std::vector<HorizontalPlane> find_horizontal_planes(const Cloud& input, const Pr
     pcl::ModelCoefficients coeffs;
     seg.setInputCloud(work);
     seg.segment(*inliers, coeffs);
-    if (inliers->indices.size() < std::max<std::size_t>(min_inliers, 50) || coeffs.values.size() != 4)
+    if (inliers->indices.size() < std::max<std::size_t>(min_inliers, 50) ||
+        coeffs.values.size() != 4)
       break;
     HorizontalPlane plane;
     plane.normal = Eigen::Vector3d(coeffs.values[0], coeffs.values[1], coeffs.values[2]);
@@ -159,7 +160,8 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   r.input_points = input.size();
   if (input.size() < p.min_points) {
     std::ostringstream m;
-    m << "too few points to preprocess: " << input.size() << " (need at least " << p.min_points << ")";
+    m << "too few points to preprocess: " << input.size() << " (need at least " << p.min_points
+      << ")";
     throw PreprocessError(m.str());
   }
   const auto planes = find_horizontal_planes(input, p);

@@ -11,7 +11,8 @@
 
 namespace semioctree {
 
-Raster::Raster(int width, int height, Rgb bg) : w_(width), h_(height), px_(std::size_t(width) * height * 3) {
+Raster::Raster(int width, int height, Rgb bg)
+    : w_(width), h_(height), px_(std::size_t(width) * height * 3) {
   for (std::size_t i = 0; i < px_.size(); i += 3) {
     px_[i] = bg.r;
     px_[i + 1] = bg.g;
@@ -78,7 +79,8 @@ void Raster::text(int x, int y, const std::string& s, Rgb c, int scale) {
   static thread_local std::vector<char> buffer(1 << 16);
   std::string copy = s;
   unsigned char color[4] = {c.r, c.g, c.b, 255};
-  const int quads = stb_easy_font_print(0, 0, copy.data(), color, buffer.data(), int(buffer.size()));
+  const int quads =
+      stb_easy_font_print(0, 0, copy.data(), color, buffer.data(), int(buffer.size()));
   // Each vertex: x, y, z (float) and 4 colour bytes; 4 vertices per quad.
   for (int q = 0; q < quads; ++q) {
     const float* v0 = reinterpret_cast<const float*>(buffer.data() + q * 4 * 16);
@@ -105,12 +107,12 @@ void Raster::write_png(const std::string& path) const {
     png_set_write_fn(
         png, &out,
         [](png_structp p, png_bytep data, png_size_t n) {
-          static_cast<std::ostream*>(png_get_io_ptr(p))->write(reinterpret_cast<const char*>(data),
-                                                               std::streamsize(n));
+          static_cast<std::ostream*>(png_get_io_ptr(p))
+              ->write(reinterpret_cast<const char*>(data), std::streamsize(n));
         },
         [](png_structp p) { static_cast<std::ostream*>(png_get_io_ptr(p))->flush(); });
-    png_set_IHDR(png, info, png_uint_32(w_), png_uint_32(h_), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
-                 PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    png_set_IHDR(png, info, png_uint_32(w_), png_uint_32(h_), 8, PNG_COLOR_TYPE_RGB,
+                 PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
     png_write_info(png, info);
     for (int y = 0; y < h_; ++y)
       png_write_row(png, const_cast<png_bytep>(&px_[std::size_t(y) * w_ * 3]));

@@ -18,7 +18,8 @@ namespace {
 
 std::string lower_extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   return ext;
 }
 
@@ -29,8 +30,9 @@ bool finite(const pcl::PointXYZ& p) {
 // Drops NaN/Inf points in place; returns how many.
 std::size_t drop_invalid(Cloud& cloud) {
   const std::size_t before = cloud.size();
-  cloud.erase(std::remove_if(cloud.begin(), cloud.end(), [](const pcl::PointXYZ& p) { return !finite(p); }),
-              cloud.end());
+  cloud.erase(
+      std::remove_if(cloud.begin(), cloud.end(), [](const pcl::PointXYZ& p) { return !finite(p); }),
+      cloud.end());
   cloud.width = std::uint32_t(cloud.size());
   cloud.height = 1;
   cloud.is_dense = true;
@@ -39,8 +41,7 @@ std::size_t drop_invalid(Cloud& cloud) {
 
 void require_file(const std::string& path) {
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
-    throw ScanReadError(path + ": no such file");
+  if (!std::filesystem::is_regular_file(path, ec)) throw ScanReadError(path + ": no such file");
 }
 
 // PCL's PCD reader trusts its header (a junk or truncated file can crash it):
@@ -74,8 +75,8 @@ void check_pcd(const std::string& path) {
     std::ifstream f(path, std::ios::binary);
     f.seekg(std::streamoff(data_idx));
     std::uint32_t sizes[2] = {0, 0};
-    if (!f.read(reinterpret_cast<char*>(sizes), sizeof(sizes)) || available < 8 + std::uint64_t(sizes[0]) ||
-        sizes[1] != std::uint64_t(n) * header.point_step)
+    if (!f.read(reinterpret_cast<char*>(sizes), sizeof(sizes)) ||
+        available < 8 + std::uint64_t(sizes[0]) || sizes[1] != std::uint64_t(n) * header.point_step)
       throw ScanReadError(path + ": PCD file is truncated or corrupted (compressed block)");
   }
 }
@@ -86,8 +87,10 @@ Scan read_pcl(const std::string& path, bool pcd) {
   Scan scan;
   scan.points.reset(new Cloud);
   scan.source = path;
-  const int rc = pcd ? pcl::io::loadPCDFile(path, *scan.points) : pcl::io::loadPLYFile(path, *scan.points);
-  if (rc < 0) throw ScanReadError(path + ": not a readable " + (pcd ? "PCD" : "PLY") + " point cloud");
+  const int rc =
+      pcd ? pcl::io::loadPCDFile(path, *scan.points) : pcl::io::loadPLYFile(path, *scan.points);
+  if (rc < 0)
+    throw ScanReadError(path + ": not a readable " + (pcd ? "PCD" : "PLY") + " point cloud");
   scan.invalid_dropped = drop_invalid(*scan.points);
   if (scan.points->empty()) throw ScanReadError(path + ": holds no valid points");
   return scan;
@@ -126,8 +129,8 @@ Scan read_xyz(const std::string& path) {
     const auto first = line.find_first_not_of(" \t\r");
     if (first == std::string::npos || line[first] == '#' || line[first] == '/') continue;
     if (!parse_numbers(line, v) || v.size() < 3)
-      throw ScanReadError(path + ":" + std::to_string(lineno) +
-                          ": expected 'x y z [...]', got '" + line.substr(0, 60) + "'");
+      throw ScanReadError(path + ":" + std::to_string(lineno) + ": expected 'x y z [...]', got '" +
+                          line.substr(0, 60) + "'");
     const pcl::PointXYZ p{float(v[0]), float(v[1]), float(v[2])};
     if (finite(p))
       scan.points->push_back(p);
@@ -148,7 +151,8 @@ std::vector<Scan> read_ptx(const std::string& path) {
   std::size_t lineno = 0;
   auto next_numbers = [&](std::size_t want, const char* what) {
     if (!std::getline(f, line))
-      throw ScanReadError(path + ":" + std::to_string(lineno + 1) + ": file ends, expected " + what);
+      throw ScanReadError(path + ":" + std::to_string(lineno + 1) + ": file ends, expected " +
+                          what);
     ++lineno;
     if (!parse_numbers(line, v) || v.size() < want)
       throw ScanReadError(path + ":" + std::to_string(lineno) + ": expected " + what + ", got '" +
@@ -254,8 +258,10 @@ ScanPose read_pose_json(const std::string& path) {
     if (!j[key].is_number()) throw ScanReadError(path + ": " + key + ": must be a number");
     return j[key].get<double>();
   };
-  if (!j.is_object()) throw ScanReadError(path + ": expected an object {\"x\":..,\"y\":..,\"z\":..,\"yaw_deg\":..}");
-  return ScanPose::from_xyz_yaw(num("x", true), num("y", true), num("z", true), num("yaw_deg", false));
+  if (!j.is_object())
+    throw ScanReadError(path + ": expected an object {\"x\":..,\"y\":..,\"z\":..,\"yaw_deg\":..}");
+  return ScanPose::from_xyz_yaw(num("x", true), num("y", true), num("z", true),
+                                num("yaw_deg", false));
 }
 
 Cloud::Ptr to_survey_frame(const Scan& scan) {

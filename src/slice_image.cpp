@@ -20,7 +20,8 @@ Rgb darker(Rgb c, double f) {
 void write_slice_png(const SemiOcTree& tree, const std::string& path, const SliceOptions& opt) {
   if (tree.coarse_count() == 0) throw std::invalid_argument("slice of an empty map");
   octomap::OcTreeKey hkey;
-  if (!tree.key_of({0, 0, opt.height}, hkey)) throw std::invalid_argument("slice height out of range");
+  if (!tree.key_of({0, 0, opt.height}, hkey))
+    throw std::invalid_argument("slice height out of range");
   // Extent of the coarse grid in xy (leaf cells), from the coarse voxels.
   long min_cell[2] = {1L << 20, 1L << 20}, max_cell[2] = {-(1L << 20), -(1L << 20)};
   const long cells_per_coarse = 1L << tree.coarse_level();
@@ -41,19 +42,23 @@ void write_slice_png(const SemiOcTree& tree, const std::string& path, const Slic
   const double r = tree.leaf_size();
   // Pixel of the world point (x, y): y grows upwards in the world, down in the image.
   auto px = [&](double x) { return ox + int(std::lround((x / r - double(min_cell[0])) * ppl)); };
-  auto py = [&](double y) { return oy + map_h - int(std::lround((y / r - double(min_cell[1])) * ppl)); };
+  auto py = [&](double y) {
+    return oy + map_h - int(std::lround((y / r - double(min_cell[1])) * ppl));
+  };
 
   img.fill_rect(ox, oy, ox + map_w, oy + map_h, {235, 235, 235});
   const unsigned hz = hkey.k[2];
   tree.for_each_octant([&](const Octant& o) {
     const unsigned span = 1u << (tree.coarse_level() - o.level);
     if (!(o.key.k[2] <= hz && hz < o.key.k[2] + span)) return;  // does not cross the cut
-    const long cx = long(o.key.k[0]) - 32768 - min_cell[0], cy = long(o.key.k[1]) - 32768 - min_cell[1];
+    const long cx = long(o.key.k[0]) - 32768 - min_cell[0],
+               cy = long(o.key.k[1]) - 32768 - min_cell[1];
     const int x0 = ox + int(cx) * ppl, x1 = x0 + int(span) * ppl;
     const int y1 = oy + map_h - int(cy) * ppl, y0 = y1 - int(span) * ppl;
     const Rgb c = label_color(o.label());
     img.fill_rect(x0, y0, x1, y1, c);
-    if (opt.outlines && span * unsigned(ppl) >= 4) img.outline_rect(x0, y0, x1, y1, darker(c, 0.75));
+    if (opt.outlines && span * unsigned(ppl) >= 4)
+      img.outline_rect(x0, y0, x1, y1, darker(c, 0.75));
   });
   auto disc = [&](const Point3& p, Rgb c) {
     const int cx = px(p.x), cy = py(p.y), rad = std::max(4, ppl * 2);
@@ -68,8 +73,8 @@ void write_slice_png(const SemiOcTree& tree, const std::string& path, const Slic
   // Title.
   char buf[200];
   std::snprintf(buf, sizeof(buf), "%s  cut at z = %.2f m, octants %.2f to %.2f m",
-                opt.title.empty() ? "semioctree" : opt.title.c_str(), opt.height, tree.coarse_size(),
-                tree.leaf_size());
+                opt.title.empty() ? "semioctree" : opt.title.c_str(), opt.height,
+                tree.coarse_size(), tree.leaf_size());
   img.text(ox, 10, buf, {0, 0, 0}, 2);
   // Scale bar: the largest of 0.5/1/2/5 m that fits in a quarter of the map.
   double bar_m = 0.5;
@@ -77,7 +82,9 @@ void write_slice_png(const SemiOcTree& tree, const std::string& path, const Slic
     if (m / r * ppl <= map_w / 4.0) bar_m = m;
   const int bar_px = int(std::lround(bar_m / r * ppl)), by = oy + map_h + 25;
   img.fill_rect(ox, by, ox + bar_px, by + 6, {0, 0, 0});
-  for (int i = 0; i <= 1; ++i) img.fill_rect(ox + i * bar_px - (i ? 2 : 0), by - 5, ox + i * bar_px + (i ? 0 : 2), by + 11, {0, 0, 0});
+  for (int i = 0; i <= 1; ++i)
+    img.fill_rect(ox + i * bar_px - (i ? 2 : 0), by - 5, ox + i * bar_px + (i ? 0 : 2), by + 11,
+                  {0, 0, 0});
   std::snprintf(buf, sizeof(buf), "%g m", bar_m);
   img.text(ox + bar_px + 10, by - 4, buf, {0, 0, 0}, 2);
   // Legend.

@@ -1,5 +1,7 @@
 #include "semioctree/version.h"
 
 namespace semioctree {
-const char* version() { return SEMIOCTREE_VERSION; }
+const char* version() {
+  return SEMIOCTREE_VERSION;
+}
 }  // namespace semioctree

@@ -30,8 +30,10 @@ int main(int argc, char** argv) {
   std::string scene_path = std::string(SEMIOCTREE_SOURCE_DIR) + "/sim/scenes/lab.scene.json";
   int rounds = 3;
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--scene") && i + 1 < argc) scene_path = argv[++i];
-    else if (!std::strcmp(argv[i], "--rounds") && i + 1 < argc) rounds = std::max(1, std::atoi(argv[++i]));
+    if (!std::strcmp(argv[i], "--scene") && i + 1 < argc)
+      scene_path = argv[++i];
+    else if (!std::strcmp(argv[i], "--rounds") && i + 1 < argc)
+      rounds = std::max(1, std::atoi(argv[++i]));
     else {
       std::fprintf(stderr, "usage: %s [--scene FILE] [--rounds R]\n", argv[0]);
       return 2;
@@ -40,7 +42,8 @@ int main(int argc, char** argv) {
   std::fprintf(stderr, "scanning %s ...\n", scene_path.c_str());
   const sim::Scene scene = sim::load_scene(scene_path);
   const auto caster = sim::make_ray_caster(sim::tessellate(scene));
-  const sim::Scan s = sim::scan(*caster, scene.scanner, {scene.robot.start.x(), scene.robot.start.y(), 0.0});
+  const sim::Scan s =
+      sim::scan(*caster, scene.scanner, {scene.robot.start.x(), scene.robot.start.y(), 0.0});
   Cloud cloud;
   for (const auto& p : s.points) cloud.push_back(pcl::PointXYZ{p.x(), p.y(), p.z()});
 
@@ -78,8 +81,10 @@ int main(int argc, char** argv) {
       "{\n  \"benchmark\": \"preprocess + discretize one lab scan, 0.8 -> 0.05 m\",\n"
       "  \"scan_points\": %zu, \"points_after_preprocess\": %zu, \"rounds\": %d,\n"
       "  \"preprocess_seconds\": %.4f,\n"
-      "  \"semioctree\": {\"discretize_seconds\": %.4f, \"octants\": %llu, \"memory_bytes\": %zu},\n"
-      "  \"homogeneous\": {\"discretize_seconds\": %.4f, \"octants\": %llu, \"memory_bytes\": %zu},\n"
+      "  \"semioctree\": {\"discretize_seconds\": %.4f, \"octants\": %llu, \"memory_bytes\": "
+      "%zu},\n"
+      "  \"homogeneous\": {\"discretize_seconds\": %.4f, \"octants\": %llu, \"memory_bytes\": "
+      "%zu},\n"
       "  \"octant_ratio\": %.2f,\n"
       "  \"discretize_speedup\": %.2f,\n"
       "  \"preprocess_plus_discretize_speedup\": %.2f\n}\n",

@@ -32,8 +32,8 @@ void occupy_box_surface(SemiOcTree& tree, double x0, double y0, double z0, doubl
   for (double x = x0; x < x1; x += r)
     for (double y = y0; y < y1; y += r)
       for (double z = z0; z < z1; z += r) {
-        const bool surface = x < x0 + r || x + r >= x1 || y < y0 + r || y + r >= y1 ||
-                             z < z0 + r || z + r >= z1;
+        const bool surface =
+            x < x0 + r || x + r >= x1 || y < y0 + r || y + r >= y1 || z < z0 + r || z + r >= z1;
         if (!surface) continue;
         octomap::OcTreeKey key;
         if (tree.key_of({x + 0.5 * r, y + 0.5 * r, z + 0.5 * r}, key))
@@ -77,7 +77,8 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--skip-octomap"))
       skip_octomap = true;
     else {
-      std::fprintf(stderr, "usage: %s [--segments N] [--seed S] [--rounds R] [--skip-octomap]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--segments N] [--seed S] [--rounds R] [--skip-octomap]\n",
+                   argv[0]);
       return 2;
     }
   }
@@ -144,7 +145,8 @@ int main(int argc, char** argv) {
     octo_rounds.push_back(seconds_since(t0));
   }
   const double semi_s = *std::min_element(semi_rounds.begin(), semi_rounds.end());
-  const double octo_s = octo_rounds.empty() ? 0.0 : *std::min_element(octo_rounds.begin(), octo_rounds.end());
+  const double octo_s =
+      octo_rounds.empty() ? 0.0 : *std::min_element(octo_rounds.begin(), octo_rounds.end());
   double worst_ratio = 1e300;
   for (std::size_t r = 0; r < octo_rounds.size(); ++r)
     worst_ratio = std::min(worst_ratio, octo_rounds[r] / semi_rounds[r]);
@@ -161,7 +163,8 @@ int main(int argc, char** argv) {
       "  \"segments\": %zu,\n"
       "  \"blocked_segments\": %zu,\n"
       "  \"answers_agree\": %zu,\n"
-      "  \"semioctree\": {\"best_round_seconds\": %.4f, \"octants_visited\": %zu, \"octants_per_second\": %.4g,"
+      "  \"semioctree\": {\"best_round_seconds\": %.4f, \"octants_visited\": %zu, "
+      "\"octants_per_second\": %.4g,"
       " \"segments_per_second\": %.4g, \"octants_in_map\": %llu},\n"
       "  \"octomap_computeRayKeys_search\": {\"best_round_seconds\": %.4f, \"keys_visited\": %zu,"
       " \"keys_per_second\": %.4g, \"segments_per_second\": %.4g, \"nodes_in_map\": %zu},\n"

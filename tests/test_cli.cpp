@@ -1,18 +1,16 @@
 // The `semioctree` command line: --help, --version, info and export, and clear
 // errors with a non-zero exit on bad input.
 #include <gtest/gtest.h>
+#include <pcl/io/pcd_io.h>
 #include <sys/wait.h>
 
 #include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
-
-#include <pcl/io/pcd_io.h>
-
-#include <nlohmann/json.hpp>
 
 #include "semioctree/octomap_ext/file_io.h"
 #include "support/sample_trees.h"
@@ -80,8 +78,9 @@ TEST(Cli, ExportWritesFilesThatReadBack) {
   const SemiOcTree t = testing::sample_tree();
   const fs::path ot = dir / "map.ot";
   write_tree_file(t, ot.string());
-  const CliRun r = run_cli("export " + ot.string() + " --color " + (dir / "c.ot").string() + " --bt " +
-                        (dir / "o.bt").string() + " --ply " + (dir / "p.ply").string());
+  const CliRun r =
+      run_cli("export " + ot.string() + " --color " + (dir / "c.ot").string() + " --bt " +
+              (dir / "o.bt").string() + " --ply " + (dir / "p.ply").string());
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_EQ(read_tree_file((dir / "c.ot").string()).type, "ColorOcTree");
   EXPECT_TRUE(read_tree_file((dir / "o.bt").string()).binary);
@@ -98,7 +97,8 @@ TEST(Cli, BadInputGivesAClearErrorAndNonZeroExit) {
   EXPECT_NE(missing.out.find("semioctree: error:"), std::string::npos) << missing.out;
   EXPECT_NE(missing.out.find("nope.ot"), std::string::npos) << missing.out;
 
-  std::ofstream(dir / "junk.ot") << "# Octomap OcTree file\nid SemiOcTree\nsize 99\nres 0.05\ndata\nxx";
+  std::ofstream(dir / "junk.ot")
+      << "# Octomap OcTree file\nid SemiOcTree\nsize 99\nres 0.05\ndata\nxx";
   const CliRun junk = run_cli("info " + (dir / "junk.ot").string());
   EXPECT_EQ(junk.code, 1);
   EXPECT_NE(junk.out.find("junk.ot"), std::string::npos) << junk.out;
@@ -110,19 +110,22 @@ TEST(Cli, BadInputGivesAClearErrorAndNonZeroExit) {
   EXPECT_NE(nothing.code, 0);
   EXPECT_NE(nothing.out.find("--color"), std::string::npos) << nothing.out;
   write_binary_file(*std::make_unique<octomap::OcTree>(0.1), (dir / "empty.bt").string());
-  const CliRun wrong = run_cli("export " + (dir / "empty.bt").string() + " --ply " +
-                            (dir / "x.ply").string());
+  const CliRun wrong =
+      run_cli("export " + (dir / "empty.bt").string() + " --ply " + (dir / "x.ply").string());
   EXPECT_EQ(wrong.code, 1);
   EXPECT_NE(wrong.out.find("not a SemiOcTree"), std::string::npos) << wrong.out;
 }
 
 TEST(Cli, DiscretizeWritesEveryFile) {
   const auto dir = testing::temp_dir("cli-disc");
-  pcl::io::savePCDFileBinary((dir / "room.pcd").string(), *testing::synthetic_room(6, 4, 2.8, 0.04));
-  const CliRun r = run_cli("discretize --cloud " + (dir / "room.pcd").string() +
-                           " --pose 3,2,1.5,0 --leaf 0.1 --coarse 0.8 --out " + (dir / "out").string());
+  pcl::io::savePCDFileBinary((dir / "room.pcd").string(),
+                             *testing::synthetic_room(6, 4, 2.8, 0.04));
+  const CliRun r =
+      run_cli("discretize --cloud " + (dir / "room.pcd").string() +
+              " --pose 3,2,1.5,0 --leaf 0.1 --coarse 0.8 --out " + (dir / "out").string());
   ASSERT_EQ(r.code, 0) << r.out;
-  for (const char* f : {"semioctree.ot", "labels_color.ot", "occupancy.bt", "slice.png", "stats.json"})
+  for (const char* f :
+       {"semioctree.ot", "labels_color.ot", "occupancy.bt", "slice.png", "stats.json"})
     EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
   EXPECT_NE(r.out.find("preprocess:"), std::string::npos) << r.out;
   const auto tree = read_semioctree_file((dir / "out" / "semioctree.ot").string());
@@ -142,12 +145,13 @@ TEST(Cli, DiscretizeWritesEveryFile) {
 
 TEST(Cli, CompareWritesTablesAndChart) {
   const auto dir = testing::temp_dir("cli-cmp");
-  pcl::io::savePCDFileBinary((dir / "room.pcd").string(), *testing::synthetic_room(6, 4, 2.8, 0.04));
+  pcl::io::savePCDFileBinary((dir / "room.pcd").string(),
+                             *testing::synthetic_room(6, 4, 2.8, 0.04));
   const CliRun r = run_cli("compare --cloud " + (dir / "room.pcd").string() +
                            " --leaves 0.4,0.2,0.1 --out " + (dir / "cmp").string());
   ASSERT_EQ(r.code, 0) << r.out;
-  for (const char* f : {"comparison.json", "comparison.md", "fig15_octants.png", "slice_semioctree_0.1.png",
-                        "slice_homogeneous_0.1.png"})
+  for (const char* f : {"comparison.json", "comparison.md", "fig15_octants.png",
+                        "slice_semioctree_0.1.png", "slice_homogeneous_0.1.png"})
     EXPECT_TRUE(fs::exists(dir / "cmp" / f)) << f;
   std::ifstream js(dir / "cmp" / "comparison.json");
   const auto j = nlohmann::json::parse(js);

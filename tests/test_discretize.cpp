@@ -8,6 +8,7 @@
 #include <set>
 
 #include "semioctree/discretize.h"
+#include "semioctree/preprocess.h"
 #include "semioctree/slice_image.h"
 #include "support/sample_trees.h"
 #include "support/synthetic_clouds.h"
@@ -35,11 +36,12 @@ TEST(Discretize, BoxOfPointsGivesTheExpectedOctantsAtEveryLevel) {
   const auto st = t->statistics();
   // Coarse grid: x 0..2, y 0..1, z 0 → 6 voxels; two of them split.
   EXPECT_EQ(t->coarse_count(), 6u);
-  EXPECT_EQ(st.at_level(0), 4u);                           // 4 unsplit empty coarse voxels
-  EXPECT_EQ(st.count[1][int(Label::kEmpty)], 7u + 7u);     // siblings of the cube, and of the far point
-  EXPECT_EQ(st.count[2][int(Label::kEmpty)], 7u);          // the far point's level-2 siblings
+  EXPECT_EQ(st.at_level(0), 4u);  // 4 unsplit empty coarse voxels
+  EXPECT_EQ(st.count[1][int(Label::kEmpty)],
+            7u + 7u);                              // siblings of the cube, and of the far point
+  EXPECT_EQ(st.count[2][int(Label::kEmpty)], 7u);  // the far point's level-2 siblings
   EXPECT_EQ(st.count[2][int(Label::kOccupied)], 0u);
-  EXPECT_EQ(st.count[3][int(Label::kOccupied)], 64u + 1u); // 4³ leaves of the cube, 1 far
+  EXPECT_EQ(st.count[3][int(Label::kOccupied)], 64u + 1u);  // 4³ leaves of the cube, 1 far
   EXPECT_EQ(st.count[3][int(Label::kEmpty)], 7u);
   EXPECT_EQ(st.with_label(Label::kOccupied), st.count[3][int(Label::kOccupied)]);
   EXPECT_EQ(rep.occupied_leaves, 65u);
@@ -105,7 +107,8 @@ std::vector<std::vector<Rgb>> read_png(const std::string& path) {
   png_bytepp rows = png_get_rows(png, info);
   std::vector<std::vector<Rgb>> img(h, std::vector<Rgb>(w));
   for (png_uint_32 y = 0; y < h; ++y)
-    for (png_uint_32 x = 0; x < w; ++x) img[y][x] = {rows[y][3 * x], rows[y][3 * x + 1], rows[y][3 * x + 2]};
+    for (png_uint_32 x = 0; x < w; ++x)
+      img[y][x] = {rows[y][3 * x], rows[y][3 * x + 1], rows[y][3 * x + 2]};
   png_destroy_read_struct(&png, &info, nullptr);
   std::fclose(f);
   return img;
@@ -123,15 +126,48 @@ TEST(SliceImage, ShowsEachLabelInItsColourAndTheScanner) {
   ASSERT_FALSE(img.empty());
   // Points are octant centres, away from the outlines.
   // Map: 3 × 2 coarse voxels of 8 leaves, 10 px per leaf → 240 × 160 px at (20, 36).
-  auto at = [&](double x, double y) { return img[std::size_t(36 + 160 - int(y / 0.05 * 10))][std::size_t(20 + int(x / 0.05 * 10))]; };
+  auto at = [&](double x, double y) {
+    return img[std::size_t(36 + 160 - int(y / 0.05 * 10))][std::size_t(20 + int(x / 0.05 * 10))];
+  };
   auto same = [](Rgb a, Rgb b) { return a.r == b.r && a.g == b.g && a.b == b.b; };
-  EXPECT_TRUE(same(at(0.025, 0.325), label_color(Label::kOccupied)));   // inside a wall leaf
+  EXPECT_TRUE(same(at(0.025, 0.325), label_color(Label::kOccupied)));  // inside a wall leaf
   EXPECT_TRUE(same(at(0.5, 0.1), label_color(Label::kOccluded)));
   const Rgb door = at(1.125, 0.125);
-  EXPECT_TRUE(same(door, label_color(Label::kDoor))) << int(door.r) << "," << int(door.g) << "," << int(door.b);
+  EXPECT_TRUE(same(door, label_color(Label::kDoor)))
+      << int(door.r) << "," << int(door.g) << "," << int(door.b);
   EXPECT_TRUE(same(at(0.9, 0.5), label_color(Label::kEmpty)));
-  EXPECT_TRUE(same(at(0.6, 0.6), label_color(Label::kScan)));           // scanner disc
-  EXPECT_THROW(write_slice_png(SemiOcTree(0.05, 0.4), (dir / "e.png").string(), o), std::invalid_argument);
+  EXPECT_TRUE(same(at(0.6, 0.6), label_color(Label::kScan)));  // scanner disc
+  EXPECT_THROW(write_slice_png(SemiOcTree(0.05, 0.4), (dir / "e.png").string(), o),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace semioctree
+
+namespace semioctree {
+namespace {
+
+TEST(Discretize, RealScanGivesAPlausibleMapAndSlice) {
+  const auto scans = read_scans(std::string(SEMIOCTREE_SHARED_DIR) + "/data/real/room_scan1.pcd");
+  const PreprocessResult pre = preprocess(*scans[0].points);
+  const auto t = discretize(*pre.cloud, pre.ceiling_height, {0.05, 0.8});
+  const auto st = t->statistics();
+  EXPECT_GT(st.with_label(Label::kOccupied), 5000u);
+  EXPECT_GT(st.with_label(Label::kEmpty), 1000u);
+  EXPECT_EQ(st.with_label(Label::kOccupied), st.count[4][int(Label::kOccupied)]);
+  const auto dir = testing::temp_dir("real-slice");
+  SliceOptions o;
+  o.height = (pre.transform * Eigen::Vector3d::Zero()).z();  // scanner height
+  o.scans = {Point3(0, 0, o.height)};
+  write_slice_png(*t, (dir / "slice.png").string(), o);
+  const auto img = read_png((dir / "slice.png").string());
+  std::size_t occupied_px = 0;
+  for (const auto& row : img)
+    for (const Rgb& c : row) {
+      const Rgb occ = label_color(Label::kOccupied);
+      occupied_px += c.r == occ.r && c.g == occ.g && c.b == occ.b;
+    }
+  EXPECT_GT(occupied_px, 500u) << "walls visible in the slice";
 }
 
 }  // namespace

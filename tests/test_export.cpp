@@ -156,7 +156,9 @@ int run(const std::string& cmd) {
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }
 
-bool have_octomap_tools() { return run("command -v convert_octree && command -v bt2vrml") == 0; }
+bool have_octomap_tools() {
+  return run("command -v convert_octree && command -v bt2vrml") == 0;
+}
 
 TEST(OctomapTools, ConvertOctreeReadsOurColorTreeAndBt) {
   if (!have_octomap_tools()) GTEST_SKIP() << "octomap-tools not installed";
@@ -187,8 +189,8 @@ TEST(OctomapTools, ConvertOctreeReadsOurColorTreeAndBt) {
 
   // Our SemiOcTree type is unknown to the stock tools: they must fail, not crash.
   write_tree_file(t, (dir / "semioctree.ot").string());
-  const int rc = run("convert_octree " + (dir / "semioctree.ot").string() + " " +
-                     (dir / "never.ot").string());
+  const int rc =
+      run("convert_octree " + (dir / "semioctree.ot").string() + " " + (dir / "never.ot").string());
   EXPECT_NE(rc, -1);
 }
 

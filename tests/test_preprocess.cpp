@@ -1,12 +1,11 @@
 // Preprocessing (paper 2.1): levelling by RANSAC floor/ceiling planes (Eq 1-2),
 // floor to z = 0, z-histogram floor/ceiling removal at 2σ, decimation.
 #include <gtest/gtest.h>
+#include <pcl/common/centroid.h>
+#include <pcl/common/transforms.h>
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
-
-#include <pcl/common/centroid.h>
-#include <pcl/common/transforms.h>
 
 #include "semioctree/preprocess.h"
 #include "support/synthetic_clouds.h"
@@ -16,18 +15,17 @@ namespace {
 
 // Eq 1 angles of the normal of the tilted floor.
 std::pair<double, double> eq1_angles(double alpha_deg, double beta_deg) {
-  const Eigen::Matrix3d R =
-      (Eigen::AngleAxisd(beta_deg * M_PI / 180, Eigen::Vector3d::UnitX()) *
-       Eigen::AngleAxisd(alpha_deg * M_PI / 180, Eigen::Vector3d::UnitY()))
-          .toRotationMatrix();
+  const Eigen::Matrix3d R = (Eigen::AngleAxisd(beta_deg * M_PI / 180, Eigen::Vector3d::UnitX()) *
+                             Eigen::AngleAxisd(alpha_deg * M_PI / 180, Eigen::Vector3d::UnitY()))
+                                .toRotationMatrix();
   const Eigen::Vector3d n = R * Eigen::Vector3d::UnitZ();
   return {std::atan(n.x() / n.z()) * 180 / M_PI, std::atan(n.y() / n.z()) * 180 / M_PI};
 }
 
 TEST(Preprocess, RecoversKnownTiltWithinATenthOfADegree) {
   const auto room = testing::synthetic_room();
-  for (const auto& [a, b] : {std::pair{3.0, -2.0}, std::pair{-7.5, 4.0}, std::pair{0.0, 0.0},
-                             std::pair{1.2, 9.0}}) {
+  for (const auto& [a, b] :
+       {std::pair{3.0, -2.0}, std::pair{-7.5, 4.0}, std::pair{0.0, 0.0}, std::pair{1.2, 9.0}}) {
     const auto tilted = testing::tilt(*room, a, b);
     const PreprocessResult r = preprocess(*tilted);
     const auto [want_a, want_b] = eq1_angles(a, b);
@@ -35,11 +33,11 @@ TEST(Preprocess, RecoversKnownTiltWithinATenthOfADegree) {
     EXPECT_NEAR(r.beta_deg, want_b, 0.1) << "beta for tilt " << a << ", " << b;
     EXPECT_NEAR(r.ceiling_height, 3.0, 0.01);
     // The levelled floor is flat and at 0: transform the original floor points.
-    const Eigen::Matrix3d R =
-        (Eigen::AngleAxisd(b * M_PI / 180, Eigen::Vector3d::UnitX()) *
-         Eigen::AngleAxisd(a * M_PI / 180, Eigen::Vector3d::UnitY()))
-            .toRotationMatrix();
-    for (const Eigen::Vector3d& corner : {Eigen::Vector3d(-3, -2.5, -1.5), Eigen::Vector3d(5, 3.5, -1.5)}) {
+    const Eigen::Matrix3d R = (Eigen::AngleAxisd(b * M_PI / 180, Eigen::Vector3d::UnitX()) *
+                               Eigen::AngleAxisd(a * M_PI / 180, Eigen::Vector3d::UnitY()))
+                                  .toRotationMatrix();
+    for (const Eigen::Vector3d& corner :
+         {Eigen::Vector3d(-3, -2.5, -1.5), Eigen::Vector3d(5, 3.5, -1.5)}) {
       const Eigen::Vector3d levelled = r.transform * (R * corner);
       EXPECT_NEAR(levelled.z(), 0.0, 0.01) << "floor corner";
     }
@@ -87,7 +85,8 @@ TEST(Preprocess, ClearErrors) {
   // Only a floor: no ceiling plane.
   Cloud floor_only;
   for (double x = 0; x < 5; x += 0.02)
-    for (double y = 0; y < 5; y += 0.02) floor_only.push_back(pcl::PointXYZ{float(x), float(y), -1.5f});
+    for (double y = 0; y < 5; y += 0.02)
+      floor_only.push_back(pcl::PointXYZ{float(x), float(y), -1.5f});
   try {
     preprocess(floor_only);
     FAIL();
@@ -121,10 +120,11 @@ TEST(Preprocess, RealScanFloorCeilingAndLevel) {
   const double tilt = std::acos(std::fabs(normal.z())) * 180 / M_PI;
   EXPECT_LT(tilt, 0.5) << "levelled floor tilt";
   RecordProperty("floor_tilt_deg", std::to_string(tilt));
-  std::printf("room_scan1: alpha %.3f°, beta %.3f°, ceiling %.3f m, floor σ %.4f, ceiling σ %.4f, "
-              "levelled floor tilt %.3f°, %zu → %zu points\n",
-              r.alpha_deg, r.beta_deg, r.ceiling_height, r.floor.sigma, r.ceiling.sigma, tilt,
-              r.input_points, r.output_points);
+  std::printf(
+      "room_scan1: alpha %.3f°, beta %.3f°, ceiling %.3f m, floor σ %.4f, ceiling σ %.4f, "
+      "levelled floor tilt %.3f°, %zu → %zu points\n",
+      r.alpha_deg, r.beta_deg, r.ceiling_height, r.floor.sigma, r.ceiling.sigma, tilt,
+      r.input_points, r.output_points);
 }
 
 }  // namespace

@@ -129,7 +129,8 @@ TEST(ScanIo, TruncatedFilesAreRejected) {
     int rejected = 0;
     for (int i = 0; i < 60; ++i) {
       const std::size_t len = bytes.size() * std::size_t(i) / 60;
-      std::ofstream(cut, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(len));
+      std::ofstream(cut, std::ios::binary | std::ios::trunc)
+          .write(bytes.data(), std::streamsize(len));
       try {
         read_scans(cut.string());
       } catch (const ScanReadError& e) {

@@ -20,10 +20,9 @@ std::map<OctantId, std::tuple<Label, float, std::uint8_t, std::uint16_t>> octant
     const SemiOcTree& t) {
   std::map<OctantId, std::tuple<Label, float, std::uint8_t, std::uint16_t>> m;
   t.for_each_octant([&](const Octant& o) {
-    m[{o.key.k[0], o.key.k[1], o.key.k[2], o.level}] =
-        std::make_tuple(o.label(), o.node->getLogOdds(),
-                        std::uint8_t(o.node->flags() & SemiOcTreeNode::kPersistentFlags),
-                        o.node->aux());
+    m[{o.key.k[0], o.key.k[1], o.key.k[2], o.level}] = std::make_tuple(
+        o.label(), o.node->getLogOdds(),
+        std::uint8_t(o.node->flags() & SemiOcTreeNode::kPersistentFlags), o.node->aux());
   });
   return m;
 }
@@ -201,7 +200,8 @@ TEST(SemiOcTree, CompactKeepsEveryOctant) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::uniform_int_distribution<int> lvl(0, 3), lab(0, kLabelCount - 1);
-  for (int i = 0; i < 300; ++i) t.set_label(key_at(t, u(rng), u(rng), u(rng)), lvl(rng), Label(lab(rng)));
+  for (int i = 0; i < 300; ++i)
+    t.set_label(key_at(t, u(rng), u(rng), u(rng)), lvl(rng), Label(lab(rng)));
   const auto before = octant_map(t);
   t.compact();
   EXPECT_EQ(octant_map(t), before);

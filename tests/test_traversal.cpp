@@ -114,9 +114,8 @@ void expect_matches_reference(const SemiOcTree& tree, unsigned seed, int count, 
     const auto got = traverse_all(tree, a, b, &end);
     const auto want = testing::reference_traversal(tree, a, b);
     ASSERT_EQ(end, TraversalEnd::kReachedEnd);
-    ASSERT_EQ(got.size(), want.size())
-        << "segment " << i << " (" << a.x << "," << a.y << "," << a.z << ")→(" << b.x << ","
-        << b.y << "," << b.z << ")";
+    ASSERT_EQ(got.size(), want.size()) << "segment " << i << " (" << a.x << "," << a.y << "," << a.z
+                                       << ")→(" << b.x << "," << b.y << "," << b.z << ")";
     for (std::size_t j = 0; j < got.size(); ++j) {
       ASSERT_EQ(got[j].key, want[j].key) << "segment " << i << " step " << j;
       ASSERT_EQ(got[j].level, want[j].level) << "segment " << i << " step " << j;
@@ -253,8 +252,9 @@ TEST(Traversal, ZeroLengthAndOutOfRange) {
   SemiOcTree tree(0.05, 0.8);
   tree.create_coarse({0, 0, 0}, Label::kEmpty);
   int steps = 0;
-  EXPECT_EQ(tree.traverse({0.4, 0.4, 0.4}, {0.4, 0.4, 0.4}, [&](const RayStep&) { return ++steps; }),
-            TraversalEnd::kReachedEnd);
+  EXPECT_EQ(
+      tree.traverse({0.4, 0.4, 0.4}, {0.4, 0.4, 0.4}, [&](const RayStep&) { return ++steps; }),
+      TraversalEnd::kReachedEnd);
   EXPECT_EQ(steps, 1);
   steps = 0;
   EXPECT_EQ(tree.traverse({0, 0, 0}, {1e9, 0, 0}, [&](const RayStep&) { return ++steps; }),

@@ -17,8 +17,8 @@
 namespace semioctree {
 
 struct DiscretizeParams {
-  double leaf = 0.05;    // r
-  double coarse = 0.8;   // L = r·2^k
+  double leaf = 0.05;   // r
+  double coarse = 0.8;  // L = r·2^k
   // The region covered is the cloud's bounds snapped outwards to multiples of
   // this size (0: the coarse size). Comparing a homogeneous grid with a
   // semioctree over the same region: give both the semioctree's L.
@@ -26,8 +26,8 @@ struct DiscretizeParams {
 };
 
 struct DiscretizeReport {
-  std::size_t points_used = 0;      // between floor and ceiling
-  std::size_t points_outside = 0;   // below the floor or above the ceiling
+  std::size_t points_used = 0;     // between floor and ceiling
+  std::size_t points_outside = 0;  // below the floor or above the ceiling
   std::size_t occupied_leaves = 0;
   CoarseIndex min_coarse, max_coarse;  // inclusive range of coarse voxels
 };

@@ -12,11 +12,11 @@
 namespace semioctree {
 
 struct SliceOptions {
-  double height = 1.5;             // z of the cut, m
-  int pixels_per_leaf = 0;         // 0: chosen so the map is about 1200 px wide (≥ 1 per leaf)
-  bool outlines = true;            // outline each octant (sizes visible)
-  std::vector<Point3> scans;       // past scanner positions (black discs)
-  std::optional<Point3> nbv;       // next best view (red disc)
+  double height = 1.5;        // z of the cut, m
+  int pixels_per_leaf = 0;    // 0: chosen so the map is about 1200 px wide (≥ 1 per leaf)
+  bool outlines = true;       // outline each octant (sizes visible)
+  std::vector<Point3> scans;  // past scanner positions (black discs)
+  std::optional<Point3> nbv;  // next best view (red disc)
   std::string title;
 };
 

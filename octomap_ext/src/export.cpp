@@ -33,7 +33,9 @@ class OctantPlacer : public TREE {
   }
 };
 
-unsigned depth_of(const SemiOcTree& tree, const Octant& o) { return tree.coarse_depth() + o.level; }
+unsigned depth_of(const SemiOcTree& tree, const Octant& o) {
+  return tree.coarse_depth() + o.level;
+}
 
 }  // namespace
 
@@ -86,7 +88,8 @@ std::size_t write_octant_ply(const SemiOcTree& tree, const std::string& path,
   std::ostringstream header;
   header << "ply\nformat binary_little_endian 1.0\n"
          << "comment semioctree octant centres; label: ";
-  for (int i = 0; i < kLabelCount; ++i) header << i << "=" << kLabelNames[i] << (i + 1 < kLabelCount ? " " : "");
+  for (int i = 0; i < kLabelCount; ++i)
+    header << i << "=" << kLabelNames[i] << (i + 1 < kLabelCount ? " " : "");
   header << "\ncomment leaf " << tree.leaf_size() << " coarse " << tree.coarse_size()
          << " (level 0 = coarse voxel)\n"
          << "element vertex " << n << "\n"

@@ -201,9 +201,8 @@ void write_binary_file(const octomap::OcTree& tree, const std::string& path) {
   // OctoMap's writeBinaryConst writes this same header but also prints
   // " done." on stderr; the node stream is OctoMap's own writeBinaryData.
   write_file_atomically(path, [&](std::ostream& s) {
-    s << kBtHeader << "\n# written by semioctree\nid " << tree.getTreeType()
-      << "\nsize " << tree.size() << "\nres " << std::setprecision(15) << tree.getResolution()
-      << "\ndata\n";
+    s << kBtHeader << "\n# written by semioctree\nid " << tree.getTreeType() << "\nsize "
+      << tree.size() << "\nres " << std::setprecision(15) << tree.getResolution() << "\ndata\n";
     tree.writeBinaryData(s);
     if (!s) throw FileError(path + ": could not write the tree");
   });

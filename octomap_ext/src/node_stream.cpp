@@ -6,7 +6,9 @@
 
 namespace semioctree {
 
-void throw_format_error(const std::string& what) { throw FileFormatError(what); }
+void throw_format_error(const std::string& what) {
+  throw FileFormatError(what);
+}
 
 std::uint64_t fnv1a64(const char* data, std::size_t n) {
   std::uint64_t h = 1469598103934665603ull;
@@ -38,8 +40,8 @@ void validate_binary_recurs(const std::string& p, std::size_t& pos, unsigned dep
                             std::size_t& count) {
   if (pos + 2 > p.size())
     throw FileFormatError("binary node data is truncated at byte " + std::to_string(pos));
-  const unsigned bits = static_cast<unsigned char>(p[pos]) |
-                        (unsigned(static_cast<unsigned char>(p[pos + 1])) << 8);
+  const unsigned bits =
+      static_cast<unsigned char>(p[pos]) | (unsigned(static_cast<unsigned char>(p[pos + 1])) << 8);
   pos += 2;
   unsigned inner = 0;
   for (unsigned i = 0; i < 8; ++i) {

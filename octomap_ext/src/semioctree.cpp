@@ -252,8 +252,8 @@ SemiOcTreeNode* SemiOcTree::create_coarse(const CoarseIndex& c, Label label) {
   node->setLogOdds(log_odds_for(label));
   node->flags_ |= SemiOcTreeNode::kCoarseRoot;
   coarse_.insert(pack(octomap::OcTreeKey(key.k[0] >> coarse_level_, key.k[1] >> coarse_level_,
-                                          key.k[2] >> coarse_level_)),
-                  node);
+                                         key.k[2] >> coarse_level_)),
+                 node);
   size_changed = true;
   return node;
 }
@@ -333,8 +333,7 @@ void SemiOcTree::delete_children(SemiOcTreeNode* node) {
   size_changed = true;
 }
 
-SemiOcTreeNode* SemiOcTree::set_label(const octomap::OcTreeKey& key, unsigned level,
-                                      Label label) {
+SemiOcTreeNode* SemiOcTree::set_label(const octomap::OcTreeKey& key, unsigned level, Label label) {
   SemiOcTreeNode* node = touch_octant(key, level);
   if (nodeHasChildren(node)) delete_children(node);
   node->set_label(label);
@@ -435,8 +434,8 @@ void SemiOcTree::mark_coarse_recurs(SemiOcTreeNode* node, unsigned depth, octoma
   if (depth == coarse_depth()) {
     node->flags_ |= SemiOcTreeNode::kCoarseRoot;
     coarse_.insert(pack(octomap::OcTreeKey(key.k[0] >> coarse_level_, key.k[1] >> coarse_level_,
-                                            key.k[2] >> coarse_level_)),
-                    node);
+                                           key.k[2] >> coarse_level_)),
+                   node);
     return;
   }
   node->flags_ &= static_cast<std::uint8_t>(~SemiOcTreeNode::kCoarseRoot);
@@ -520,8 +519,7 @@ std::istream& SemiOcTree::readData(std::istream& s) {
   };
   const std::size_t counted =
       validate_node_stream(payload, SemiOcTreeNode::kSerializedBytes, check_node);
-  if (counted != h.node_count)
-    throw FileFormatError("SemiOcTree node count mismatch");
+  if (counted != h.node_count) throw FileFormatError("SemiOcTree node count mismatch");
 
   setResolution(h.resolution);
   coarse_level_ = h.coarse_level;

@@ -2,11 +2,10 @@
 // and preprocess, with progress lines.
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <CLI/CLI.hpp>
 
 #include "semioctree/octomap_ext/semioctree.h"
 #include "semioctree/preprocess.h"

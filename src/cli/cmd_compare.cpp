@@ -33,20 +33,25 @@ void add_compare_command(CLI::App& app) {
       "Discretize one scan with the semioctree and with the homogeneous grid at several "
       "resolutions; write the paper's Table 1, Table 2 and Fig 15 (comparison.json, "
       "comparison.md, fig15_octants.png) and a slice image per run.");
-  auto* cloud_opt = cmd->add_option("--cloud", o->input.files, "point cloud (.pcd, .ply, .xyz, .ptx)")
-                        ->check(CLI::ExistingFile);
+  auto* cloud_opt =
+      cmd->add_option("--cloud", o->input.files, "point cloud (.pcd, .ply, .xyz, .ptx)")
+          ->check(CLI::ExistingFile);
   cmd->add_option("--pose", o->input.poses, "scanner pose X,Y,Z[,YAW_DEG] of the cloud");
 #ifdef SEMIOCTREE_HAVE_SIM
-  auto* scene_opt = cmd->add_option("--scene", o->scene,
-                                    "scene file: scan it from the robot's start with the synthetic scanner")
-                        ->check(CLI::ExistingFile);
+  auto* scene_opt =
+      cmd->add_option("--scene", o->scene,
+                      "scene file: scan it from the robot's start with the synthetic scanner")
+          ->check(CLI::ExistingFile);
   cmd->add_option("--seed", o->seed, "scanner noise seed (with --scene)")->capture_default_str();
   scene_opt->excludes(cloud_opt);
 #else
   (void)cloud_opt;
 #endif
-  cmd->add_option("--leaves", o->leaves, "leaf sizes to compare, metres")->capture_default_str()->delimiter(',');
-  cmd->add_option("--coarse", o->coarse, "coarse voxel size of the semioctree, metres")->capture_default_str();
+  cmd->add_option("--leaves", o->leaves, "leaf sizes to compare, metres")
+      ->capture_default_str()
+      ->delimiter(',');
+  cmd->add_option("--coarse", o->coarse, "coarse voxel size of the semioctree, metres")
+      ->capture_default_str();
   cmd->add_option("--out", o->out, "output directory")->required();
   add_preprocess_options(*cmd, o->pre);
   cmd->callback([o] {
@@ -55,7 +60,8 @@ void add_compare_command(CLI::App& app) {
     for (double leaf : o->leaves) SemiOcTree::coarse_level_for(leaf, o->coarse);
     PreparedCloud cloud;
 #ifdef SEMIOCTREE_HAVE_SIM
-    if (!o->scene.empty()) cloud = scan_scene_at_start(o->scene, o->seed, o->pre);
+    if (!o->scene.empty())
+      cloud = scan_scene_at_start(o->scene, o->seed, o->pre);
     else
 #endif
       cloud = prepare_clouds(o->input, o->pre);
@@ -76,8 +82,9 @@ void add_compare_command(CLI::App& app) {
         run.stats = tree->statistics();
         run.memory_bytes = tree->memory_bytes();
         run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        std::printf("%-11s %5.2f → %4.2f m: %9llu octants, %7.1f MB [%.2f s]\n", method, p.coarse, leaf,
-                    static_cast<unsigned long long>(run.stats.total()), run.memory_bytes / 1e6, run.seconds);
+        std::printf("%-11s %5.2f → %4.2f m: %9llu octants, %7.1f MB [%.2f s]\n", method, p.coarse,
+                    leaf, static_cast<unsigned long long>(run.stats.total()),
+                    run.memory_bytes / 1e6, run.seconds);
         std::fflush(stdout);
         SliceOptions slice;
         slice.height = cloud.scanners.empty() ? 1.5 : cloud.scanners.front().z;
@@ -91,7 +98,8 @@ void add_compare_command(CLI::App& app) {
       }
     }
     write_comparison(runs, o->out);
-    std::printf("wrote %s/{comparison.json, comparison.md, fig15_octants.png, slice_*.png}\n", o->out.c_str());
+    std::printf("wrote %s/{comparison.json, comparison.md, fig15_octants.png, slice_*.png}\n",
+                o->out.c_str());
   });
 }
 

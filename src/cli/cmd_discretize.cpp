@@ -32,10 +32,12 @@ void add_discretize_command(CLI::App& app) {
       "SemiOcTree (occupancy analysis). Writes semioctree.ot, labels_color.ot, occupancy.bt, "
       "slice.png and stats.json.");
   auto* cloud_opt =
-      cmd->add_option("--cloud", o->input.files, "point cloud: .pcd, .ply, .xyz/.txt or .ptx (repeat for several)")
+      cmd->add_option("--cloud", o->input.files,
+                      "point cloud: .pcd, .ply, .xyz/.txt or .ptx (repeat for several)")
           ->check(CLI::ExistingFile);
 #ifdef SEMIOCTREE_HAVE_SIM
-  cmd->add_option("--scene", o->scene, "scene file: scan it from the robot's start with the synthetic scanner")
+  cmd->add_option("--scene", o->scene,
+                  "scene file: scan it from the robot's start with the synthetic scanner")
       ->check(CLI::ExistingFile)
       ->excludes(cloud_opt);
   cmd->add_option("--seed", o->seed, "scanner noise seed (with --scene)")->capture_default_str();
@@ -45,9 +47,11 @@ void add_discretize_command(CLI::App& app) {
   cmd->add_option("--pose", o->input.poses,
                   "scanner pose X,Y,Z[,YAW_DEG] in the survey frame, one per --cloud (default: the "
                   "origin, or the pose stored in a PTX file)");
-  cmd->add_option("--pose-file", o->input.pose_file, "JSON pose {\"x\",\"y\",\"z\",\"yaw_deg\"} for a single --cloud")
+  cmd->add_option("--pose-file", o->input.pose_file,
+                  "JSON pose {\"x\",\"y\",\"z\",\"yaw_deg\"} for a single --cloud")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--leaf", o->disc.leaf, "leaf (finest octant) size r in metres")->capture_default_str();
+  cmd->add_option("--leaf", o->disc.leaf, "leaf (finest octant) size r in metres")
+      ->capture_default_str();
   cmd->add_option("--coarse", o->disc.coarse,
                   "coarse voxel size L in metres; must be r*2^k (L = r gives the homogeneous grid)")
       ->capture_default_str();
@@ -61,7 +65,8 @@ void add_discretize_command(CLI::App& app) {
       throw std::invalid_argument("discretize: give --cloud FILE or --scene FILE");
     PreparedCloud cloud;
 #ifdef SEMIOCTREE_HAVE_SIM
-    if (!o->scene.empty()) cloud = scan_scene_at_start(o->scene, o->seed, o->pre);
+    if (!o->scene.empty())
+      cloud = scan_scene_at_start(o->scene, o->seed, o->pre);
     else
 #endif
       cloud = prepare_clouds(o->input, o->pre);
@@ -77,14 +82,17 @@ void add_discretize_command(CLI::App& app) {
     run.stats = tree->statistics();
     run.memory_bytes = tree->memory_bytes();
     run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::printf("discretize: %zu coarse voxels, %llu octants (%zu occupied leaves) at %g → %g m [%.2f s]\n",
-                tree->coarse_count(), static_cast<unsigned long long>(run.stats.total()),
-                rep.occupied_leaves, o->disc.coarse, o->disc.leaf, run.seconds);
+    std::printf(
+        "discretize: %zu coarse voxels, %llu octants (%zu occupied leaves) at %g → %g m [%.2f s]\n",
+        tree->coarse_count(), static_cast<unsigned long long>(run.stats.total()),
+        rep.occupied_leaves, o->disc.coarse, o->disc.leaf, run.seconds);
     SliceOptions slice;
     slice.height = o->slice_height >= 0 ? o->slice_height
                                         : (cloud.scanners.empty() ? 1.5 : cloud.scanners.front().z);
     slice.scans = cloud.scanners;
-    slice.title = std::filesystem::path(o->scene.empty() ? o->input.files.front() : o->scene).filename().string();
+    slice.title = std::filesystem::path(o->scene.empty() ? o->input.files.front() : o->scene)
+                      .filename()
+                      .string();
     write_map_files(*tree, o->out, slice);
     write_run_json(run, (std::filesystem::path(o->out) / "stats.json").string());
     std::printf("wrote %s/{semioctree.ot, labels_color.ot, occupancy.bt, slice.png, stats.json}\n",

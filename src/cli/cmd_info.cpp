@@ -22,10 +22,12 @@ void print_semioctree(const SemiOcTree& t) {
             << "octants:        " << st.total() << "\n\n";
   std::cout << std::left << std::setw(8) << "level" << std::setw(10) << "size[m]";
   for (int l = 0; l < kLabelCount; ++l) std::cout << std::right << std::setw(10) << kLabelNames[l];
-  std::cout << std::setw(11) << "total" << "\n";
+  std::cout << std::setw(11) << "total"
+            << "\n";
   for (unsigned lv = 0; lv <= t.coarse_level(); ++lv) {
     std::cout << std::left << std::setw(8) << lv << std::setw(10) << t.octant_size(lv);
-    for (int l = 0; l < kLabelCount; ++l) std::cout << std::right << std::setw(10) << st.count[lv][l];
+    for (int l = 0; l < kLabelCount; ++l)
+      std::cout << std::right << std::setw(10) << st.count[lv][l];
     std::cout << std::setw(11) << st.at_level(lv) << "\n";
   }
   std::cout << "\nvolume per label (m³, % of labelled octants):\n";
@@ -69,10 +71,12 @@ void print_occupancy(const TREE& t) {
 
 void add_info_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
-      "info", "Describe a .ot / .bt file: tree type, leaf and coarse size, octants per level "
-              "and label, volumes, memory.");
+      "info",
+      "Describe a .ot / .bt file: tree type, leaf and coarse size, octants per level "
+      "and label, volumes, memory.");
   auto file = std::make_shared<std::string>();
-  cmd->add_option("FILE", *file, "OctoMap file (.ot of type SemiOcTree, OcTree or ColorOcTree, or .bt)")
+  cmd->add_option("FILE", *file,
+                  "OctoMap file (.ot of type SemiOcTree, OcTree or ColorOcTree, or .bt)")
       ->required();
   cmd->callback([file] {
     const TreeFile tf = read_tree_file(*file);

@@ -45,12 +45,13 @@ sim::Pose2 parse_at(const std::string& text) {
       used = 0;
     }
     if (used == 0 || used != item.size() || !std::isfinite(v))
-      throw std::runtime_error("--at: expected X,Y or X,Y,YAW_DEG (numbers, metres and degrees), got \"" + text +
-                               "\"");
+      throw std::runtime_error(
+          "--at: expected X,Y or X,Y,YAW_DEG (numbers, metres and degrees), got \"" + text + "\"");
     values.push_back(v);
   }
   if (values.size() != 2 && values.size() != 3)
-    throw std::runtime_error("--at: expected X,Y or X,Y,YAW_DEG (2 or 3 numbers), got \"" + text + "\"");
+    throw std::runtime_error("--at: expected X,Y or X,Y,YAW_DEG (2 or 3 numbers), got \"" + text +
+                             "\"");
   return {values[0], values[1], values.size() == 3 ? values[2] : 0.0};
 }
 
@@ -59,7 +60,8 @@ void run_scan(const ScanArgs& a) {
   std::string ext = a.out.size() >= 4 ? a.out.substr(a.out.size() - 4) : "";
   for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (ext != ".pcd" && ext != ".ply")
-    throw std::runtime_error("--out: expected a file name ending in .pcd or .ply, got \"" + a.out + "\"");
+    throw std::runtime_error("--out: expected a file name ending in .pcd or .ply, got \"" + a.out +
+                             "\"");
 
   sim::Scene scene = sim::load_scene(a.scene, Eigen::Vector2d(pose.x, pose.y), pose.yaw_deg);
   if (a.azimuth_step > 0) scene.scanner.azimuth_step_deg = a.azimuth_step;
@@ -69,17 +71,18 @@ void run_scan(const ScanArgs& a) {
   const sim::SolidModel solids(scene);
   const std::string inside = solids.solid_containing({pose.x, pose.y, scene.scanner.height});
   if (!inside.empty())
-    throw std::runtime_error("--at: the scanner at (" + std::to_string(pose.x) + ", " + std::to_string(pose.y) +
-                             ") would be inside " + inside + " of " + a.scene);
+    throw std::runtime_error("--at: the scanner at (" + std::to_string(pose.x) + ", " +
+                             std::to_string(pose.y) + ") would be inside " + inside + " of " +
+                             a.scene);
 
   const auto t0 = std::chrono::steady_clock::now();
   const sim::SceneTriangles triangles = sim::tessellate(scene);
   const std::unique_ptr<sim::RayCaster> caster = sim::make_ray_caster(triangles);
   const sim::ScanGrid grid = sim::scan_grid(scene.scanner);
   std::cerr << "scan: " << scene.name << " (" << triangles.triangles.size() << " triangles), "
-            << grid.rows << " x " << grid.cols << " = " << static_cast<std::uint64_t>(grid.rows) * grid.cols
-            << " rays from (" << pose.x << ", " << pose.y << ", " << scene.scanner.height << ") yaw " << pose.yaw_deg
-            << "°\n";
+            << grid.rows << " x " << grid.cols << " = "
+            << static_cast<std::uint64_t>(grid.rows) * grid.cols << " rays from (" << pose.x << ", "
+            << pose.y << ", " << scene.scanner.height << ") yaw " << pose.yaw_deg << "°\n";
   sim::ScanOptions options;
   options.seed = a.seed;
   options.threads = a.threads;
@@ -95,35 +98,41 @@ void run_scan(const ScanArgs& a) {
   const sim::Scan scan = sim::scan(*caster, scene.scanner, pose, options);
   std::cerr << "\n";
   sim::write_scan(a.out, scan);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cout << "wrote " << a.out << ": " << scan.points.size() << " points of " << scan.rays_cast
-            << " rays (scanner frame; pose x=" << pose.x << " y=" << pose.y << " z=" << scan.sensor_height
-            << " yaw_deg=" << pose.yaw_deg << " in the file's viewpoint), " << seconds << " s\n";
+            << " rays (scanner frame; pose x=" << pose.x << " y=" << pose.y
+            << " z=" << scan.sensor_height << " yaw_deg=" << pose.yaw_deg
+            << " in the file's viewpoint), " << seconds << " s\n";
 }
 
 }  // namespace
 
 void add_scan_command(CLI::App& app) {
   auto args = std::make_shared<ScanArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "scan",
-      "Simulate one 360° terrestrial laser scan of a scene and write the points (in the scanner's frame, with "
-      "intensity, row and column) as binary PCD or PLY. The scanner pose goes into the file's viewpoint.");
-  cmd->add_option("--scene", args->scene,
-                  "scene to scan: a .scene.json file, an .obj/.ply triangle mesh or an OctoMap .bt file "
-                  "(occupied voxels are solid)")
+  CLI::App* cmd = app.add_subcommand("scan",
+                                     "Simulate one 360° terrestrial laser scan of a scene and "
+                                     "write the points (in the scanner's frame, with "
+                                     "intensity, row and column) as binary PCD or PLY. The scanner "
+                                     "pose goes into the file's viewpoint.");
+  cmd->add_option(
+         "--scene", args->scene,
+         "scene to scan: a .scene.json file, an .obj/.ply triangle mesh or an OctoMap .bt file "
+         "(occupied voxels are solid)")
       ->required();
   cmd->add_option("--at", args->at,
                   "scanner position on the floor and heading: X,Y or X,Y,YAW_DEG (metres, degrees; "
                   "the optical centre is at the scene's scanner height)")
       ->required();
   cmd->add_option("--out", args->out, "output file, FILE.pcd or FILE.ply (binary)")->required();
-  cmd->add_option("--seed", args->seed, "seed of the range noise; the same seed gives the same file (default 1)");
+  cmd->add_option("--seed", args->seed,
+                  "seed of the range noise; the same seed gives the same file (default 1)");
   cmd->add_option("--azimuth-step", args->azimuth_step,
                   "azimuth step in degrees (default: the scene's scanner.azimuth_step_deg, 0.2)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--elevation-step", args->elevation_step,
-                  "elevation step in degrees (default: the scene's scanner.elevation_step_deg, 0.2)")
+  cmd->add_option(
+         "--elevation-step", args->elevation_step,
+         "elevation step in degrees (default: the scene's scanner.elevation_step_deg, 0.2)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--threads", args->threads,
                   "worker threads (default 0: one per core); the output does not depend on it");

@@ -5,10 +5,9 @@
 #include "commands.h"
 
 int main(int argc, char** argv) {
-  CLI::App app{
-      "semioctree " SEMIOCTREE_VERSION
-      " — Next-Best-View planning for indoor laser-scanning surveys on a semioctree\n"
-      "(a world-aligned coarse voxel grid refined as OctoMap octrees where needed)."};
+  CLI::App app{"semioctree " SEMIOCTREE_VERSION
+               " — Next-Best-View planning for indoor laser-scanning surveys on a semioctree\n"
+               "(a world-aligned coarse voxel grid refined as OctoMap octrees where needed)."};
   app.set_version_flag("--version", std::string("semioctree ") + SEMIOCTREE_VERSION);
   app.require_subcommand(1);
   app.fallthrough(false);

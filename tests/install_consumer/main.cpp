@@ -17,7 +17,8 @@ int main() {
   auto* semi = dynamic_cast<semioctree::SemiOcTree*>(back.get());
   if (!semi || semi->coarse_level() != 4) return 2;
   int steps = 0;
-  semi->traverse({0.1, 0.1, 0.1}, {0.7, 0.7, 0.7}, [&](const semioctree::RayStep&) { return ++steps > 0; });
+  semi->traverse({0.1, 0.1, 0.1}, {0.7, 0.7, 0.7},
+                 [&](const semioctree::RayStep&) { return ++steps > 0; });
   std::printf("semioctree %s: %d step(s)\n", semioctree::version(), steps);
   return steps == 1 ? 0 : 3;
 }

@@ -82,8 +82,8 @@ inline std::vector<RefStep> reference_traversal(const SemiOcTree& tree, const Po
           const unsigned mask = ~((1u << tree.coarse_level()) - 1u);
           for (int i = 0; i < 3; ++i) okey.k[i] = octomap::key_type(cell.k[i] & mask);
         }
-        const auto id = std::make_tuple(unsigned(okey.k[0]), unsigned(okey.k[1]),
-                                        unsigned(okey.k[2]), level);
+        const auto id =
+            std::make_tuple(unsigned(okey.k[0]), unsigned(okey.k[1]), unsigned(okey.k[2]), level);
         auto it = octants.find(id);
         if (it == octants.end())
           octants.emplace(id, std::make_pair(enter, has_node));
@@ -93,16 +93,15 @@ inline std::vector<RefStep> reference_traversal(const SemiOcTree& tree, const Po
   std::vector<std::pair<Key, RefStep>> seq;
   for (const auto& [id, v] : octants) {
     RefStep st;
-    st.key = octomap::OcTreeKey(octomap::key_type(std::get<0>(id)),
-                                octomap::key_type(std::get<1>(id)),
-                                octomap::key_type(std::get<2>(id)));
+    st.key =
+        octomap::OcTreeKey(octomap::key_type(std::get<0>(id)), octomap::key_type(std::get<1>(id)),
+                           octomap::key_type(std::get<2>(id)));
     st.level = std::get<3>(id);
     st.has_node = v.second;
     st.t_enter = v.first.first == -inf ? 0.0 : v.first.first;
     seq.emplace_back(v.first, st);
   }
-  std::sort(seq.begin(), seq.end(),
-            [](const auto& x, const auto& y) { return x.first < y.first; });
+  std::sort(seq.begin(), seq.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
   std::vector<RefStep> out;
   for (auto& p : seq) out.push_back(p.second);
   return out;

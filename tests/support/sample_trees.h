@@ -24,7 +24,8 @@ inline SemiOcTree sample_tree() {
   };
   const unsigned leaf = t.coarse_level();
   for (double y = 0.025; y < 0.8; y += 0.05)
-    for (double z = 0.025; z < 0.8; z += 0.05) t.set_label(key(0.025, y, z), leaf, Label::kOccupied);
+    for (double z = 0.025; z < 0.8; z += 0.05)
+      t.set_label(key(0.025, y, z), leaf, Label::kOccupied);
   t.set_label(key(0.5, 0.1, 0.1), 1, Label::kOccluded);
   t.set_label(key(0.5, 0.3, 0.1), 2, Label::kOccluded);
   t.set_label(key(1.1, 0.1, 0.1), leaf, Label::kDoor);

@@ -11,9 +11,9 @@ namespace semioctree::testing {
 // A w × d × h room: points on floor (z = 0), ceiling (z = h), four walls and a
 // box (a table), with Gaussian noise, seen from (sx, sy, scanner_height).
 // Points are in the scanner frame: the room is shifted by −scanner position.
-inline Cloud::Ptr synthetic_room(double w = 8.0, double d = 6.0, double h = 3.0, double spacing = 0.03,
-                                 double noise = 0.002, unsigned seed = 1, double sx = 3.0,
-                                 double sy = 2.5, double scanner_height = 1.5) {
+inline Cloud::Ptr synthetic_room(double w = 8.0, double d = 6.0, double h = 3.0,
+                                 double spacing = 0.03, double noise = 0.002, unsigned seed = 1,
+                                 double sx = 3.0, double sy = 2.5, double scanner_height = 1.5) {
   Cloud::Ptr c(new Cloud);
   std::mt19937 rng(seed);
   std::normal_distribution<double> n(0.0, noise);
@@ -44,10 +44,9 @@ inline Cloud::Ptr synthetic_room(double w = 8.0, double d = 6.0, double h = 3.0,
 
 // Rotation Rot(x, β)·Rot(y, α) of paper Eq 2, applied to a cloud.
 inline Cloud::Ptr tilt(const Cloud& in, double alpha_deg, double beta_deg) {
-  const Eigen::Matrix3d R =
-      (Eigen::AngleAxisd(beta_deg * M_PI / 180, Eigen::Vector3d::UnitX()) *
-       Eigen::AngleAxisd(alpha_deg * M_PI / 180, Eigen::Vector3d::UnitY()))
-          .toRotationMatrix();
+  const Eigen::Matrix3d R = (Eigen::AngleAxisd(beta_deg * M_PI / 180, Eigen::Vector3d::UnitX()) *
+                             Eigen::AngleAxisd(alpha_deg * M_PI / 180, Eigen::Vector3d::UnitY()))
+                                .toRotationMatrix();
   Cloud::Ptr out(new Cloud);
   for (const auto& p : in) {
     const Eigen::Vector3d q = R * Eigen::Vector3d(p.x, p.y, p.z);

@@ -24,8 +24,8 @@ class FileError : public std::runtime_error {
 
 struct TreeFile {
   std::unique_ptr<octomap::AbstractOcTree> tree;
-  bool binary = false;   // a .bt occupancy file (always read as octomap::OcTree)
-  std::string type;      // "OcTree", "ColorOcTree", "SemiOcTree"
+  bool binary = false;  // a .bt occupancy file (always read as octomap::OcTree)
+  std::string type;     // "OcTree", "ColorOcTree", "SemiOcTree"
   std::size_t header_size = 0;
 };
 

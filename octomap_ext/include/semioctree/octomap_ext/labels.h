@@ -43,9 +43,15 @@ inline constexpr std::array<Rgb, kLabelCount> kLabelColors = {{
     {230, 0, 0},      // nbv: red
 }};
 
-inline std::string_view label_name(Label l) { return kLabelNames[static_cast<int>(l)]; }
-inline Rgb label_color(Label l) { return kLabelColors[static_cast<int>(l)]; }
-inline bool is_valid_label(std::uint8_t v) { return v < kLabelCount; }
+inline std::string_view label_name(Label l) {
+  return kLabelNames[static_cast<int>(l)];
+}
+inline Rgb label_color(Label l) {
+  return kLabelColors[static_cast<int>(l)];
+}
+inline bool is_valid_label(std::uint8_t v) {
+  return v < kLabelCount;
+}
 std::optional<Label> label_from_name(std::string_view name);
 
 // How a label maps to OctoMap occupancy in .bt exports.

@@ -56,7 +56,7 @@ struct OctantStatistics {
   unsigned coarse_level = 0;
   double leaf_size = 0;
   std::vector<std::array<std::uint64_t, kLabelCount>> count;  // [level][label]
-  std::array<double, kLabelCount> volume{};                    // m³ per label
+  std::array<double, kLabelCount> volume{};                   // m³ per label
   std::uint64_t coarse_voxels = 0;
 
   std::uint64_t total() const;
@@ -67,17 +67,17 @@ struct OctantStatistics {
 
 // Why a segment traversal ended.
 enum class TraversalEnd {
-  kReachedEnd,   // the octant containing the end point was visited
-  kStopped,      // the visitor asked to stop
-  kOutOfRange,   // an end point lies outside OctoMap's key range (nothing visited)
+  kReachedEnd,  // the octant containing the end point was visited
+  kStopped,     // the visitor asked to stop
+  kOutOfRange,  // an end point lies outside OctoMap's key range (nothing visited)
 };
 
 // An octant crossed by a segment, handed to the traversal visitor.
 struct RayStep {
-  octomap::OcTreeKey key;  // minimum-corner key of the octant
-  unsigned level = 0;      // 0 = coarse voxel ... coarse_level() = leaf
+  octomap::OcTreeKey key;                // minimum-corner key of the octant
+  unsigned level = 0;                    // 0 = coarse voxel ... coarse_level() = leaf
   const SemiOcTreeNode* node = nullptr;  // null: no coarse voxel there (unknown space)
-  double t_enter = 0;      // segment parameter in [0, 1] where the octant is entered
+  double t_enter = 0;                    // segment parameter in [0, 1] where the octant is entered
   Label label() const { return node ? node->label() : Label::kUnknown; }
 };
 
@@ -188,8 +188,8 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
   struct SegmentFrame;  // per-segment constants of traverse()
   template <class Visitor>
   bool traverse_children(const SegmentFrame& f, const SemiOcTreeNode* node, unsigned level,
-                         const std::int64_t base[3], double t_in, int p_in, double t_out,
-                         int p_out, Visitor& visit) const;
+                         const std::int64_t base[3], double t_in, int p_in, double t_out, int p_out,
+                         Visitor& visit) const;
   static std::uint64_t pack(const octomap::OcTreeKey& coarse_key_bits);
   void rebuild_coarse_index();
   void prune_subtree(SemiOcTreeNode* node);

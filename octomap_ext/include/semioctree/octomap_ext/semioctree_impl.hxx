@@ -82,8 +82,8 @@ bool SemiOcTree::traverse_children(const SegmentFrame& f, const SemiOcTreeNode* 
   // The segment is inside `node` for events in [in, out). Its children are
   // entered where the segment crosses the node's three mid-planes.
   const std::int64_t half = std::int64_t(1) << (coarse_level_ - level - 1);
-  unsigned child = 0;      // bit i: upper half along axis i
-  unsigned pending = 0;    // bit i: mid-plane i is crossed after `in`, before `out`
+  unsigned child = 0;    // bit i: upper half along axis i
+  unsigned pending = 0;  // bit i: mid-plane i is crossed after `in`, before `out`
   double tm[3] = {0, 0, 0};
 #pragma GCC unroll 3
   for (int i = 0; i < 3; ++i) {
@@ -133,7 +133,8 @@ bool SemiOcTree::traverse_children(const SegmentFrame& f, const SemiOcTreeNode* 
       const octomap::OcTreeKey key(static_cast<octomap::key_type>(child_base[0] + 32768),
                                    static_cast<octomap::key_type>(child_base[1] + 32768),
                                    static_cast<octomap::key_type>(child_base[2] + 32768));
-      if (!visit(RayStep{key, level + 1, c, t_cur == -std::numeric_limits<double>::infinity() ? 0.0 : t_cur}))
+      if (!visit(RayStep{key, level + 1, c,
+                         t_cur == -std::numeric_limits<double>::infinity() ? 0.0 : t_cur}))
         return false;
     }
     if (!flips) return true;  // left the node
@@ -163,7 +164,8 @@ TraversalEnd SemiOcTree::traverse(const Point3& a, const Point3& b, Visitor&& vi
   }
   constexpr double kInf = std::numeric_limits<double>::infinity();
   const unsigned k = coarse_level_;
-  const std::int64_t span = std::int64_t(1) << k;  // leaf cells per coarse voxel (no << on negatives)
+  const std::int64_t span = std::int64_t(1)
+                            << k;  // leaf cells per coarse voxel (no << on negatives)
   // Coarse-level DDA: the coarse cell and the next coarse plane crossing per axis.
   std::int64_t cc[3], ce[3];
   double tn[3];
@@ -197,9 +199,9 @@ TraversalEnd SemiOcTree::traverse(const Point3& a, const Point3& b, Visitor&& vi
       key.k[i] = static_cast<octomap::key_type>(base[i] + 32768);
     }
     // O(1) access to the coarse voxel through the hashed grid.
-    const SemiOcTreeNode* node = coarse_.find((std::uint64_t(key.k[0] >> k) << 32) |
-                                              (std::uint64_t(key.k[1] >> k) << 16) |
-                                              std::uint64_t(key.k[2] >> k));
+    const SemiOcTreeNode* node =
+        coarse_.find((std::uint64_t(key.k[0] >> k) << 32) | (std::uint64_t(key.k[1] >> k) << 16) |
+                     std::uint64_t(key.k[2] >> k));
     if (exits) {  // fetch the next coarse voxel's slot while this one is handled
       std::uint64_t next[3];
       for (int i = 0; i < 3; ++i)

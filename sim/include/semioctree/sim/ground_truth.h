@@ -1,0 +1,91 @@
+// What a simulated survey is judged against: the true openings, samples of the surfaces
+// a complete survey should see, line-of-sight queries, and the floor plan.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "semioctree/sim/geometry.h"
+#include "semioctree/sim/raycaster.h"
+#include "semioctree/sim/scene.h"
+#include "semioctree/sim/solids.h"
+
+namespace semioctree::sim {
+
+struct OpeningRect {
+  OpeningKind kind = OpeningKind::door;
+  int wall = 0;  // walls[wall].openings[index]
+  int index = 0;
+  std::array<Eigen::Vector3d, 4> corners;  // bottom-near, bottom-far, top-far, top-near
+  double width = 0.0;
+  double height = 0.0;
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // wall normal (left of from→to)
+};
+
+struct SurfaceSample {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // unit, pointing out of the solid
+  PartRef part;
+};
+
+// Every opening of every wall as a rectangle in world coordinates.
+std::vector<OpeningRect> opening_rects(const Scene& scene);
+
+// Points about `spacing` apart on the surfaces of walls (opening jambs included), boxes,
+// cylinders and meshes; floors and ceilings (slabs) excluded, as the survey removes them.
+// Samples buried in another solid (e.g. the bottom of a box standing on the floor, a
+// wall end inside the next wall) are left out. Deterministic.
+std::vector<SurfaceSample> surface_samples(const Scene& scene, double spacing = 0.02);
+
+// Rooms and walkable floor, on a square grid of `cell` metres covering the scene.
+struct FloorPlan {
+  double cell = 0.05;
+  Eigen::Vector2d origin = Eigen::Vector2d::Zero();  // corner of cell (0, 0)
+  int nx = 0, ny = 0;
+  // Room id of each cell (row-major, y then x): rooms are the regions enclosed by walls
+  // (openings count as wall); -1 for wall footprint and for the region around the
+  // building. Rooms are numbered by decreasing area.
+  std::vector<int> room;
+  std::vector<double> room_area;  // m², floor area within the walls
+  // Cells where the robot may stand: inside survey_area if the scene gives it, else
+  // free floor reachable from robot.start with the robot's radius.
+  std::vector<bool> survey;
+  double survey_area_m2 = 0.0;
+  int start_room = -1;  // room of robot.start
+
+  bool in_survey_area(const Eigen::Vector2d& p) const;
+  int room_at(const Eigen::Vector2d& p) const;
+};
+
+class GroundTruth {
+ public:
+  explicit GroundTruth(const Scene& scene);
+
+  const Scene& scene() const { return scene_; }
+  const SceneTriangles& triangles() const { return triangles_; }
+  const RayCaster& ray_caster() const { return *caster_; }
+  const SolidModel& solids() const { return solids_; }
+
+  std::vector<OpeningRect> openings() const { return opening_rects(scene_); }
+  std::vector<SurfaceSample> surface_samples(double spacing = 0.02) const {
+    return sim::surface_samples(scene_, spacing);
+  }
+  // True if the segment a→b crosses no geometry (its end points may lie on a surface:
+  // the first and last millimetre are not tested).
+  bool segment_free(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const;
+  // True if a robot of the scene's radius can stand at p: no solid in its cylinder from
+  // just above the floor to the scanner height.
+  bool standing_free(const Eigen::Vector2d& p) const;
+
+  FloorPlan floor_plan(double cell = 0.05) const;
+
+ private:
+  Scene scene_;
+  SceneTriangles triangles_;
+  std::unique_ptr<RayCaster> caster_;
+  SolidModel solids_;
+};
+
+}  // namespace semioctree::sim

@@ -1,0 +1,14 @@
+# Tests and benchmark of the synthetic scanner (sim/). Included from tests/CMakeLists.txt.
+semioctree_add_test(test_scene SOURCES ${PROJECT_SOURCE_DIR}/tests/test_scene.cpp
+  LIBS semioctree_sim nlohmann_json::nlohmann_json octomap octomath)
+semioctree_add_test(test_raycaster SOURCES ${PROJECT_SOURCE_DIR}/tests/test_raycaster.cpp LIBS semioctree_sim)
+semioctree_add_test(test_scanner SOURCES ${PROJECT_SOURCE_DIR}/tests/test_scanner.cpp LIBS semioctree_sim)
+semioctree_add_test(test_robot SOURCES ${PROJECT_SOURCE_DIR}/tests/test_robot.cpp LIBS semioctree_sim)
+semioctree_add_test(test_ground_truth SOURCES ${PROJECT_SOURCE_DIR}/tests/test_ground_truth.cpp LIBS semioctree_sim)
+# The CLI tests in test_scene and test_scanner run the built tool.
+if(TARGET semioctree_cli)
+  add_dependencies(test_scene semioctree_cli)
+  add_dependencies(test_scanner semioctree_cli)
+endif()
+semioctree_add_bench(bench_raycast SOURCES ${PROJECT_SOURCE_DIR}/tests/bench_raycast.cpp LIBS semioctree_sim)
+target_compile_definitions(bench_raycast PRIVATE SEMIOCTREE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
