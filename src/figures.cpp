@@ -143,6 +143,22 @@ void write_run_json(const DiscretizationRun& run, const std::string& path) {
   write_text(path, j.dump(2) + "\n");
 }
 
+void write_openings_json(const std::vector<DetectedOpening>& openings, const std::string& path) {
+  json list = json::array();
+  for (const auto& o : openings) {
+    json corners = json::array();
+    for (const auto& c : o.corners) corners.push_back({c.x(), c.y(), c.z()});
+    list.push_back({{"kind", to_string(o.kind)},
+                    {"corners", corners},
+                    {"width", o.width},
+                    {"height", o.height},
+                    {"sill", o.sill},
+                    {"los_fraction", o.los_fraction}});
+  }
+  json j = {{"format", "semioctree-openings"}, {"version", 1}, {"openings", list}};
+  write_text(path, j.dump(2) + "\n");
+}
+
 std::vector<double> increment_factors(const std::vector<DiscretizationRun>& runs) {
   std::vector<double> f;
   for (std::size_t i = 0; i + 1 < runs.size(); ++i)

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "semioctree/octomap_ext/semioctree.h"
+#include "semioctree/openings.h"
 
 namespace semioctree {
 
@@ -29,6 +30,9 @@ void write_run_json(const DiscretizationRun& run, const std::string& path);
 // comparison.json, comparison.md and fig15_octants.png in `dir`. `runs` holds
 // both methods at each resolution.
 void write_comparison(const std::vector<DiscretizationRun>& runs, const std::string& dir);
+
+// openings.json: kind, 4 corners, width, height, sill and LOS share of each opening.
+void write_openings_json(const std::vector<DetectedOpening>& openings, const std::string& path);
 
 // Increment factors count(r/2) / count(r) of one method, runs ordered by
 // decreasing resolution size; used by write_comparison and tests.

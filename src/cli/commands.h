@@ -12,6 +12,7 @@ void add_info_command(CLI::App& app);
 void add_export_command(CLI::App& app);
 void add_discretize_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
+void add_classify_command(CLI::App& app);
 #ifdef SEMIOCTREE_HAVE_SIM
 void add_scan_command(CLI::App& app);
 void add_scene_info_command(CLI::App& app);

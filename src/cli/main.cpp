@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   semioctree::cli::add_export_command(app);
   semioctree::cli::add_discretize_command(app);
   semioctree::cli::add_compare_command(app);
+  semioctree::cli::add_classify_command(app);
 #ifdef SEMIOCTREE_HAVE_SIM
   semioctree::cli::add_scan_command(app);
   semioctree::cli::add_scene_info_command(app);

@@ -1,0 +1,52 @@
+// Stage 5 (paper 2.2.3): the occlusion study. Every non-occupied octant is
+// classified from the scanner positions so far by ray casting through the
+// SemiOcTree (octant-sized steps): the segment from a scanner to it crosses an
+// occupied octant → occluded; it passes through a door or window and nothing
+// occupied → out; otherwise → empty. An octant whose sample points disagree is
+// partly visible and is split, down to the leaf, so the boundary between seen
+// and unseen space is at leaf resolution while wholly visible or wholly hidden
+// space stays coarse. A point is seen if any scanner sees it; the scanner's
+// range and elevation limits apply.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "semioctree/octomap_ext/semioctree.h"
+
+namespace semioctree {
+
+struct ScannerView {
+  Point3 position;                 // optical centre, map frame
+  double min_range = 0.6;          // m
+  double max_range = 60.0;         // m
+  double elevation_min_deg = -60;  // 0 = horizontal
+  double elevation_max_deg = 90;
+};
+
+enum class Visibility : std::uint8_t { kHidden = 0, kThroughOpening = 1, kDirect = 2 };
+
+struct OcclusionParams {
+  // Only re-test octants labelled occluded (a new scanner position), instead
+  // of every empty/occluded/out octant.
+  bool only_occluded = false;
+  // Sample points are the centre and the 8 corners pulled in by this fraction
+  // of the octant size (corners exactly on faces belong to the neighbour).
+  double corner_inset = 0.02;
+};
+
+struct OcclusionReport {
+  std::size_t octants_tested = 0;
+  std::size_t octants_split = 0;
+  std::size_t segments = 0;                      // segments cast
+  std::size_t empty = 0, occluded = 0, out = 0;  // leaf octants labelled
+};
+
+// How well `p` is seen from the best of `views`.
+Visibility point_visibility(const SemiOcTree& tree, const std::vector<ScannerView>& views,
+                            const Point3& p);
+
+OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>& views,
+                                const OcclusionParams& params = {});
+
+}  // namespace semioctree

@@ -1,0 +1,113 @@
+// Stage 4 (paper 2.2.2): doors and windows. Vertical planes are found by RANSAC
+// (largest first, inliers removed before the next); each plane is cut into wall
+// segments where a long stretch of it holds no point at any height, and each
+// wall segment tall and long enough is rasterised into a 2-D occupancy grid in
+// wall coordinates (along the wall × height above the floor). Rectangular holes
+// in that grid are candidates: a door reaches the floor, a window has a sill
+// and ends below the ceiling, each within its size limits. A hole in the points
+// is either an opening or the shadow of something standing in front of the
+// wall, so a candidate is confirmed only when enough of its cells can be seen
+// directly from a scanner position through the SemiOcTree (no occupied octant
+// on the way). Confirmed holes label the leaf octants of the wall plane door or
+// window (label_openings), which the occlusion study then treats as exits.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstddef>
+#include <vector>
+
+#include "semioctree/octomap_ext/semioctree.h"
+#include "semioctree/scan_io.h"
+
+namespace semioctree {
+
+struct OpeningParams {
+  // --- walls (RANSAC, PCL SACMODEL_PARALLEL_PLANE about z) ---
+  double ransac_distance = 0.03;     // inlier distance to the plane, m
+  double max_normal_tilt_deg = 5.0;  // a wall's normal is within this of horizontal
+  int ransac_iterations = 500;
+  std::size_t ransac_sample = 60000;       // RANSAC runs on a random subset this large
+  std::size_t min_plane_points = 500;      // smaller planes end the search
+  int max_planes = 20;                     // planes searched at most
+  double min_wall_length = 1.5;            // a wall segment is at least this long, m
+  double min_wall_height_fraction = 0.75;  // its points span this share of the room height
+  double wall_split_gap = 0.5;  // columns empty at every height over this length split a plane, m
+
+  // --- wall grid ---
+  double cell = 0.0;        // grid cell side, m (0: the tree's leaf size)
+  int min_cell_points = 1;  // a cell with at least this many points is occupied
+
+  // --- doors: holes reaching the floor ---
+  double door_min_width = 0.6, door_max_width = 2.5;    // m
+  double door_min_height = 1.8, door_max_height = 2.6;  // m
+  double floor_tolerance = 0.1;  // a door's bottom is at most this above the floor, m
+
+  // --- windows: holes with a sill, ending below the ceiling ---
+  double window_min_width = 0.4, window_max_width = 4.0;    // m
+  double window_min_height = 0.4, window_max_height = 2.5;  // m
+  double window_min_sill = 0.3;                             // m above the floor
+  double window_min_lintel = 0.1;  // wall left between the window's top and the ceiling, m
+
+  // --- confirmation by line of sight ---
+  double los_min_fraction = 0.85;  // share of the hole's cells seen directly (paper: 85 %)
+  // Not in the paper: a hole partly hidden by something standing in front of
+  // it (a door whose lower half is behind a bench) fails the 85 % rule although
+  // what is seen of it is seen through. It is still confirmed when at least this
+  // share of its cells is seen directly and the seen cells reach the hole's left
+  // and right sides and its top (a window: also its bottom), so that the
+  // rectangle is fixed by what is seen and not by the shadow. A pure shadow is
+  // seen through nowhere and stays rejected. 0 turns the rule off (paper only).
+  double partly_hidden_min_los = 0.4;
+  // A LOS ray ends this far (in leaf sizes) before the cell centre, so that the
+  // occupied wall leaves at the rim of the hole do not count as obstacles.
+  double los_end_margin_leaves = 1.0;
+};
+
+enum class OpeningKind { kDoor, kWindow };
+const char* to_string(OpeningKind kind);  // "door" / "window"
+Label label_of(OpeningKind kind);         // Label::kDoor / Label::kWindow
+
+struct DetectedOpening {
+  OpeningKind kind = OpeningKind::kDoor;
+  // World (levelled) frame, in the wall plane: bottom-near, bottom-far,
+  // top-far, top-near ("near" = smaller coordinate along the wall).
+  std::array<Eigen::Vector3d, 4> corners;
+  double width = 0, height = 0;  // m
+  double sill = 0;               // bottom above the floor, m (≈ 0 for doors)
+  double los_fraction = 0;       // share of its cells with direct LOS from a scanner
+  Eigen::Vector3d wall_normal = Eigen::Vector3d::Zero();  // unit, horizontal
+  int wall = -1;                                          // index into OpeningsReport::walls
+};
+
+// A wall segment that was rasterised.
+struct DetectedWall {
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // unit, horizontal
+  double offset = 0;                                 // plane: normal·p + offset = 0
+  Eigen::Vector3d u_axis = Eigen::Vector3d::Zero();  // along the wall
+  double u_min = 0, u_max = 0;                       // extent along u_axis, m
+  std::size_t points = 0;
+};
+
+struct OpeningsReport {
+  std::vector<DetectedWall> walls;
+  std::size_t candidates = 0;             // holes of door or window size
+  std::vector<DetectedOpening> rejected;  // candidates failing the LOS test
+  std::size_t los_rays = 0;               // segments cast for the LOS test
+};
+
+// `levelled` has the floor at z = 0 and floor/ceiling points removed (see
+// preprocess); `tree` is its occupancy analysis (see discretize). Openings
+// overlapping a larger confirmed one on the same wall are dropped.
+std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceiling_height,
+                                             const SemiOcTree& tree,
+                                             const std::vector<Point3>& scanner_positions,
+                                             const OpeningParams& params = {},
+                                             OpeningsReport* report = nullptr);
+
+// Labels the leaf octants that the hole's rectangle passes through door or
+// window; occupied leaves (the points of a jamb) keep their label. Returns the
+// number of leaves labelled.
+std::size_t label_openings(SemiOcTree& tree, const std::vector<DetectedOpening>& openings);
+
+}  // namespace semioctree

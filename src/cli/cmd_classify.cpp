@@ -1,0 +1,142 @@
+// `semioctree classify --cloud FILE... [--pose X,Y,Z,YAW ...] --out DIR`:
+// preprocess, discretize and classify real scans whose scanner poses are known
+// (one pose per file; the first scan at the origin by default).
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "cloud_input.h"
+#include "commands.h"
+#include "semioctree/discretize.h"
+#include "semioctree/figures.h"
+#include "semioctree/occlusion.h"
+#include "semioctree/openings.h"
+#include "semioctree/outputs.h"
+#ifdef SEMIOCTREE_HAVE_SIM
+#include "sim_input.h"
+#endif
+
+namespace semioctree::cli {
+
+void add_classify_command(CLI::App& app) {
+  struct Options {
+    CloudInput input;
+    std::string scene;
+    std::uint64_t seed = 1;
+    PreprocessParams pre;
+    DiscretizeParams disc;
+    ScannerView limits;
+    std::string out;
+    double slice_height = -1;
+  };
+  auto o = std::make_shared<Options>();
+  auto* cmd = app.add_subcommand(
+      "classify",
+      "Preprocess and discretize scans with known scanner poses, then classify every octant "
+      "as empty, occupied, occluded, door, window or out by ray casting from the scanner positions "
+      "(the "
+      "occlusion study). Doors and windows are detected first (walls by RANSAC, holes confirmed by "
+      "line of sight). Writes the files of `discretize` with all classes, and openings.json.");
+  auto* cloud_opt =
+      cmd->add_option("--cloud", o->input.files,
+                      "point cloud: .pcd, .ply, .xyz/.txt or .ptx (repeat for several)")
+          ->check(CLI::ExistingFile);
+  cmd->add_option("--pose", o->input.poses,
+                  "scanner pose X,Y,Z[,YAW_DEG] of each --cloud in the survey frame (default: the "
+                  "origin, or the pose stored in a PTX file)");
+#ifdef SEMIOCTREE_HAVE_SIM
+  cmd->add_option("--scene", o->scene,
+                  "scene file: scan it from the robot's start with the synthetic scanner")
+      ->check(CLI::ExistingFile)
+      ->excludes(cloud_opt);
+  cmd->add_option("--seed", o->seed, "scanner noise seed (with --scene)")->capture_default_str();
+#else
+  (void)cloud_opt;
+#endif
+  cmd->add_option("--leaf", o->disc.leaf, "leaf (finest octant) size r in metres")
+      ->capture_default_str();
+  cmd->add_option("--coarse", o->disc.coarse, "coarse voxel size L = r*2^k in metres")
+      ->capture_default_str();
+  cmd->add_option("--max-range", o->limits.max_range, "scanner maximum range, m")
+      ->capture_default_str();
+  cmd->add_option("--min-range", o->limits.min_range, "scanner minimum range, m")
+      ->capture_default_str();
+  cmd->add_option("--elevation-min", o->limits.elevation_min_deg,
+                  "scanner lowest elevation, degrees")
+      ->capture_default_str();
+  cmd->add_option("--elevation-max", o->limits.elevation_max_deg,
+                  "scanner highest elevation, degrees")
+      ->capture_default_str();
+  cmd->add_option("--out", o->out, "output directory")->required();
+  cmd->add_option("--slice-height", o->slice_height,
+                  "height of the slice image in metres above the floor (default: scanner height)");
+  add_preprocess_options(*cmd, o->pre);
+  cmd->callback([o] {
+    SemiOcTree::coarse_level_for(o->disc.leaf, o->disc.coarse);
+    if (o->input.files.empty() && o->scene.empty())
+      throw std::invalid_argument("classify: give --cloud FILE or --scene FILE");
+    PreparedCloud cloud;
+#ifdef SEMIOCTREE_HAVE_SIM
+    if (!o->scene.empty())
+      cloud = scan_scene_at_start(o->scene, o->seed, o->pre);
+    else
+#endif
+      cloud = prepare_clouds(o->input, o->pre);
+    auto t0 = std::chrono::steady_clock::now();
+    const auto tree = discretize(*cloud.pre.cloud, cloud.pre.ceiling_height, o->disc);
+    std::printf("discretize: %zu coarse voxels [%.2f s]\n", tree->coarse_count(),
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    t0 = std::chrono::steady_clock::now();
+    OpeningsReport orep;
+    const auto openings = detect_openings(*cloud.pre.cloud, cloud.pre.ceiling_height, *tree,
+                                          cloud.scanners, OpeningParams{}, &orep);
+    label_openings(*tree, openings);
+    std::printf(
+        "openings: %zu walls, %zu candidates, %zu confirmed, %zu rejected as occlusion shadows "
+        "[%.2f s]\n",
+        orep.walls.size(), orep.candidates, openings.size(), orep.rejected.size(),
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    for (const auto& op : openings)
+      std::printf("  %-6s %.2f x %.2f m, sill %.2f m, line of sight %.0f %%\n", to_string(op.kind),
+                  op.width, op.height, op.sill, 100 * op.los_fraction);
+    t0 = std::chrono::steady_clock::now();
+    std::vector<ScannerView> views;
+    for (const Point3& s : cloud.scanners) {
+      ScannerView v = o->limits;
+      v.position = s;
+      views.push_back(v);
+    }
+    const OcclusionReport rep = study_occlusion(*tree, views);
+    tree->compact();
+    DiscretizationRun run;
+    run.method = o->disc.leaf == o->disc.coarse ? "homogeneous" : "semioctree";
+    run.leaf = o->disc.leaf;
+    run.coarse = o->disc.coarse;
+    run.stats = tree->statistics();
+    run.memory_bytes = tree->memory_bytes();
+    run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::printf(
+        "occlusion study: %zu octants tested, %zu split, %zu segments; empty %.1f %%, occupied "
+        "%.1f %%, "
+        "occluded %.1f %%, out %.1f %% of the volume [%.2f s]\n",
+        rep.octants_tested, rep.octants_split, rep.segments,
+        volume_percent(run.stats, Label::kEmpty), volume_percent(run.stats, Label::kOccupied),
+        volume_percent(run.stats, Label::kOccluded), volume_percent(run.stats, Label::kOut),
+        run.seconds);
+    SliceOptions slice;
+    slice.height = o->slice_height >= 0 ? o->slice_height
+                                        : (cloud.scanners.empty() ? 1.5 : cloud.scanners.front().z);
+    slice.scans = cloud.scanners;
+    slice.title = "classified";
+    write_map_files(*tree, o->out, slice);
+    write_run_json(run, (std::filesystem::path(o->out) / "stats.json").string());
+    write_openings_json(openings, (std::filesystem::path(o->out) / "openings.json").string());
+    std::printf(
+        "wrote %s/{semioctree.ot, labels_color.ot, occupancy.bt, slice.png, stats.json, "
+        "openings.json}\n",
+        o->out.c_str());
+  });
+}
+
+}  // namespace semioctree::cli

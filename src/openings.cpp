@@ -1,0 +1,429 @@
+#include "semioctree/openings.h"
+
+#include <pcl/ModelCoefficients.h>
+#include <pcl/PointIndices.h>
+#include <pcl/sample_consensus/method_types.h>
+#include <pcl/sample_consensus/model_types.h>
+#include <pcl/segmentation/sac_segmentation.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <random>
+#include <set>
+#include <tuple>
+
+namespace semioctree {
+
+const char* to_string(OpeningKind kind) {
+  return kind == OpeningKind::kDoor ? "door" : "window";
+}
+
+Label label_of(OpeningKind kind) {
+  return kind == OpeningKind::kDoor ? Label::kDoor : Label::kWindow;
+}
+
+namespace {
+
+// A vertical plane n·p + d = 0 with n horizontal and unit.
+struct VerticalPlane {
+  Eigen::Vector2d n = Eigen::Vector2d::UnitX();
+  double d = 0;
+  double distance(const pcl::PointXYZ& p) const { return n.x() * p.x + n.y() * p.y + d; }
+};
+
+// Least-squares vertical plane through the points' xy footprint: the normal is
+// the direction of least spread. RANSAC's own model comes from 3 points and is
+// tilted by their noise; refitting on all inliers makes the wall frame exact
+// enough for a grid of leaf-sized cells over 10 m.
+VerticalPlane fit_vertical_plane(const Cloud& cloud, const std::vector<int>& indices) {
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (int i : indices) mean += Eigen::Vector2d(cloud[i].x, cloud[i].y);
+  mean /= double(indices.size());
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (int i : indices) {
+    const Eigen::Vector2d q = Eigen::Vector2d(cloud[i].x, cloud[i].y) - mean;
+    cov += q * q.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+  VerticalPlane plane;
+  plane.n = eig.eigenvectors().col(0).normalized();  // smallest eigenvalue first
+  plane.d = -plane.n.dot(mean);
+  return plane;
+}
+
+// Occupancy grid of one wall segment: column c covers u ∈ [u0 + c·cell, ...),
+// row r covers z ∈ [r·cell, (r+1)·cell); the floor is row 0's bottom.
+struct WallGrid {
+  int cols = 0, rows = 0;
+  double cell = 0, u0 = 0;
+  std::vector<std::uint8_t> occupied;  // row-major (r·cols + c)
+  std::vector<std::int8_t> los;        // -1 not yet cast, 0 hidden, 1 seen directly
+  bool occ(int c, int r) const { return occupied[std::size_t(r) * cols + c] != 0; }
+};
+
+// Rectangle of empty cells, inclusive bounds.
+struct CellRect {
+  int c0, c1, r0, r1;
+  OpeningKind kind;
+  int area() const { return (c1 - c0 + 1) * (r1 - r0 + 1); }
+  bool overlaps(const CellRect& o) const {
+    return c0 <= o.c1 && o.c0 <= c1 && r0 <= o.r1 && o.r0 <= r1;
+  }
+};
+
+struct WallFrame {
+  VerticalPlane plane;
+  Eigen::Vector3d normal, u_axis;
+  // World point at (u along the wall, height z) in the plane.
+  Eigen::Vector3d at(double u, double z) const {
+    return -plane.d * normal + u * u_axis + z * Eigen::Vector3d::UnitZ();
+  }
+};
+
+// Every maximal rectangle of empty cells (no side can grow by a whole row or
+// column of empty cells) that does not touch the ends of the wall segment, kept
+// when its size fits a door or a window. Maximality is what makes a hole's
+// rectangle its full extent; enclosure by wall cells on the left, right and top
+// is what separates a hole from the space beyond the end of a wall.
+std::vector<CellRect> find_hole_candidates(const WallGrid& g, double ceiling,
+                                           const OpeningParams& p) {
+  std::vector<CellRect> out;
+  std::vector<std::uint8_t> free_cols(std::size_t(g.cols));
+  const double eps = 1e-9;
+  for (int r0 = 0; r0 < g.rows; ++r0) {
+    std::fill(free_cols.begin(), free_cols.end(), 1);
+    for (int r1 = r0; r1 < g.rows; ++r1) {
+      bool any = false;
+      for (int c = 0; c < g.cols; ++c) {
+        free_cols[c] = free_cols[c] && !g.occ(c, r1);
+        any = any || free_cols[c];
+      }
+      if (!any) break;
+      // Runs of columns free over rows r0..r1 (maximal left and right).
+      for (int c = 0; c < g.cols;) {
+        if (!free_cols[c]) {
+          ++c;
+          continue;
+        }
+        int a = c;
+        while (c < g.cols && free_cols[c]) ++c;
+        const int b = c - 1;
+        if (a == 0 || b == g.cols - 1) continue;  // not enclosed by the wall
+        if (r1 + 1 >= g.rows) continue;           // reaches the ceiling: not enclosed
+        auto row_empty = [&](int r) {
+          for (int cc = a; cc <= b; ++cc)
+            if (g.occ(cc, r)) return false;
+          return true;
+        };
+        if (row_empty(r1 + 1)) continue;            // could grow upwards
+        if (r0 > 0 && row_empty(r0 - 1)) continue;  // could grow downwards
+        const double width = (b - a + 1) * g.cell;
+        const double bottom = r0 * g.cell;
+        const double top = (r1 + 1) * g.cell;
+        const bool door = bottom <= p.floor_tolerance + eps && width + eps >= p.door_min_width &&
+                          width <= p.door_max_width + eps && top + eps >= p.door_min_height &&
+                          top <= p.door_max_height + eps;
+        const bool window =
+            bottom + eps >= p.window_min_sill && top <= ceiling - p.window_min_lintel + eps &&
+            width + eps >= p.window_min_width && width <= p.window_max_width + eps &&
+            top - bottom + eps >= p.window_min_height && top - bottom <= p.window_max_height + eps;
+        if (door)
+          out.push_back({a, b, r0, r1, OpeningKind::kDoor});
+        else if (window)
+          out.push_back({a, b, r0, r1, OpeningKind::kWindow});
+      }
+    }
+  }
+  return out;
+}
+
+// Direct line of sight from any scanner to the cell centre: the segment is
+// traversed through the octants and stops at the first occupied one. It ends a
+// little before the cell centre because the wall leaves at the rim of the hole
+// (and jamb points) are occupied and would hide the hole's own edge cells.
+bool cell_visible(const SemiOcTree& tree, const std::vector<Point3>& scanners,
+                  const Eigen::Vector3d& target, double margin, std::size_t& rays) {
+  for (const Point3& s : scanners) {
+    const Eigen::Vector3d a(s.x, s.y, s.z);
+    const Eigen::Vector3d dir = target - a;
+    const double len = dir.norm();
+    if (len <= margin) return true;
+    const Eigen::Vector3d end = target - dir * (margin / len);
+    ++rays;
+    const TraversalEnd e =
+        tree.traverse(Point3(a.x(), a.y(), a.z()), Point3(end.x(), end.y(), end.z()),
+                      [](const RayStep& step) { return step.label() != Label::kOccupied; });
+    if (e == TraversalEnd::kReachedEnd) return true;
+  }
+  return false;
+}
+
+double los_fraction(WallGrid& g, const WallFrame& f, const CellRect& r, const SemiOcTree& tree,
+                    const std::vector<Point3>& scanners, double margin, std::size_t& rays) {
+  std::size_t seen = 0;
+  for (int row = r.r0; row <= r.r1; ++row)
+    for (int c = r.c0; c <= r.c1; ++c) {
+      std::int8_t& v = g.los[std::size_t(row) * g.cols + c];
+      if (v < 0) {
+        const Eigen::Vector3d centre = f.at(g.u0 + (c + 0.5) * g.cell, (row + 0.5) * g.cell);
+        v = cell_visible(tree, scanners, centre, margin, rays) ? 1 : 0;
+      }
+      seen += std::size_t(v);
+    }
+  return double(seen) / double(r.area());
+}
+
+// The rule for partly hidden holes (OpeningParams::partly_hidden_min_los):
+// the cells seen directly reach the sides that define the rectangle.
+bool seen_cells_span_rect(const WallGrid& g, const CellRect& r) {
+  auto seen = [&](int c, int row) { return g.los[std::size_t(row) * g.cols + c] == 1; };
+  bool left = false, right = false, top = false, bottom = false;
+  for (int row = r.r0; row <= r.r1; ++row) {
+    left = left || seen(r.c0, row);
+    right = right || seen(r.c1, row);
+  }
+  for (int c = r.c0; c <= r.c1; ++c) {
+    top = top || seen(c, r.r1);
+    bottom = bottom || seen(c, r.r0);
+  }
+  return left && right && top && (r.kind == OpeningKind::kDoor || bottom);
+}
+
+DetectedOpening make_opening(const WallGrid& g, const WallFrame& f, const CellRect& r, double los,
+                             int wall) {
+  DetectedOpening o;
+  o.kind = r.kind;
+  const double u_near = g.u0 + r.c0 * g.cell, u_far = g.u0 + (r.c1 + 1) * g.cell;
+  // A door's hole starts at the floor whatever the lowest empty row is.
+  const double bottom = r.kind == OpeningKind::kDoor ? 0.0 : r.r0 * g.cell;
+  const double top = (r.r1 + 1) * g.cell;
+  o.corners = {f.at(u_near, bottom), f.at(u_far, bottom), f.at(u_far, top), f.at(u_near, top)};
+  o.width = u_far - u_near;
+  o.height = top - bottom;
+  o.sill = bottom;
+  o.los_fraction = los;
+  o.wall_normal = f.normal;
+  o.wall = wall;
+  return o;
+}
+
+// Runs of columns holding points, where gaps up to `max_gap` columns are
+// bridged: a door's lintel keeps its columns non-empty, so only a stretch empty
+// at every height (another wall's corner, a full-height shadow) splits a plane.
+std::vector<std::pair<int, int>> column_runs(const std::vector<std::size_t>& col_points,
+                                             int max_gap) {
+  std::vector<std::pair<int, int>> runs;
+  const int n = int(col_points.size());
+  int start = -1, last = -1;
+  for (int c = 0; c < n; ++c) {
+    if (col_points[c] == 0) continue;
+    if (start < 0) {
+      start = c;
+    } else if (c - last - 1 > max_gap) {
+      runs.emplace_back(start, last);
+      start = c;
+    }
+    last = c;
+  }
+  if (start >= 0) runs.emplace_back(start, last);
+  return runs;
+}
+
+}  // namespace
+
+std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceiling_height,
+                                             const SemiOcTree& tree,
+                                             const std::vector<Point3>& scanner_positions,
+                                             const OpeningParams& p, OpeningsReport* report) {
+  OpeningsReport local_report;
+  OpeningsReport& rep = report ? *report : local_report;
+  rep = OpeningsReport{};
+  std::vector<DetectedOpening> result;
+  const double cell = p.cell > 0 ? p.cell : tree.leaf_size();
+  const double margin = p.los_end_margin_leaves * tree.leaf_size();
+  const int rows = int(std::ceil(ceiling_height / cell - 1e-9));
+  if (rows <= 0 || scanner_positions.empty()) return result;
+
+  // Walls live between floor and ceiling; points outside (the ground seen
+  // through a window, a roof) would only tilt the planes.
+  Cloud::Ptr remaining(new Cloud);
+  remaining->reserve(levelled.size());
+  for (const auto& q : levelled)
+    if (std::isfinite(q.x) && q.z >= 0 && q.z < ceiling_height) remaining->push_back(q);
+
+  pcl::SACSegmentation<pcl::PointXYZ> seg;
+  seg.setOptimizeCoefficients(false);  // refitted below on all inliers
+  seg.setModelType(pcl::SACMODEL_PARALLEL_PLANE);
+  seg.setMethodType(pcl::SAC_RANSAC);
+  seg.setAxis(Eigen::Vector3f::UnitZ());
+  seg.setEpsAngle(p.max_normal_tilt_deg * M_PI / 180.0);
+  seg.setDistanceThreshold(p.ransac_distance);
+  seg.setMaxIterations(p.ransac_iterations);
+  std::mt19937 rng(20240505);
+
+  const Point3& s0 = scanner_positions.front();
+  for (int round = 0; round < p.max_planes && remaining->size() >= p.min_plane_points; ++round) {
+    // RANSAC on a random subset: the big planes are found as well and the cost
+    // does not grow with the cloud.
+    Cloud::Ptr sample(new Cloud);
+    if (remaining->size() > p.ransac_sample) {
+      std::vector<int> idx(remaining->size());
+      std::iota(idx.begin(), idx.end(), 0);
+      std::shuffle(idx.begin(), idx.end(), rng);
+      sample->reserve(p.ransac_sample);
+      for (std::size_t i = 0; i < p.ransac_sample; ++i) sample->push_back((*remaining)[idx[i]]);
+    } else {
+      *sample = *remaining;
+    }
+    pcl::PointIndices inliers;
+    pcl::ModelCoefficients coeffs;
+    seg.setInputCloud(sample);
+    seg.segment(inliers, coeffs);
+    if (inliers.indices.size() < 3) break;
+    VerticalPlane plane = fit_vertical_plane(*sample, inliers.indices);
+
+    // Inliers of the whole remaining cloud; the rest goes on to the next round.
+    std::vector<int> in;
+    Cloud::Ptr rest(new Cloud);
+    rest->reserve(remaining->size());
+    for (int i = 0; i < int(remaining->size()); ++i) {
+      if (std::abs(plane.distance((*remaining)[i])) <= p.ransac_distance)
+        in.push_back(i);
+      else
+        rest->push_back((*remaining)[i]);
+    }
+    if (in.size() < p.min_plane_points) break;
+    plane = fit_vertical_plane(*remaining, in);  // exact frame from all inliers
+    // The normal faces the first scanner, so "near" and "far" are the same on
+    // every run and the LOS margin pulls towards the room.
+    if (plane.n.x() * s0.x + plane.n.y() * s0.y + plane.d < 0) {
+      plane.n = -plane.n;
+      plane.d = -plane.d;
+    }
+    WallFrame frame;
+    frame.plane = plane;
+    frame.normal = Eigen::Vector3d(plane.n.x(), plane.n.y(), 0);
+    frame.u_axis = Eigen::Vector3d(-plane.n.y(), plane.n.x(), 0);
+
+    std::vector<double> u(in.size());
+    double u_min = std::numeric_limits<double>::max(), u_max = -u_min;
+    for (std::size_t k = 0; k < in.size(); ++k) {
+      const auto& q = (*remaining)[in[k]];
+      u[k] = frame.u_axis.x() * q.x + frame.u_axis.y() * q.y;
+      u_min = std::min(u_min, u[k]);
+      u_max = std::max(u_max, u[k]);
+    }
+    const int all_cols = int(std::floor((u_max - u_min) / cell)) + 1;
+    std::vector<std::size_t> col_points(std::size_t(all_cols), 0);
+    for (double uk : u) ++col_points[std::size_t(std::min(all_cols - 1, int((uk - u_min) / cell)))];
+
+    for (const auto& [c0, c1] : column_runs(col_points, int(p.wall_split_gap / cell))) {
+      WallGrid g;
+      g.cell = cell;
+      g.u0 = u_min + c0 * cell;
+      g.cols = c1 - c0 + 1;
+      g.rows = rows;
+      if (g.cols * cell < p.min_wall_length) continue;
+      std::vector<int> counts(std::size_t(g.cols) * rows, 0);
+      double z_lo = ceiling_height, z_hi = 0;
+      std::size_t points = 0;
+      for (std::size_t k = 0; k < in.size(); ++k) {
+        const int c = int((u[k] - g.u0) / cell);
+        if (c < 0 || c >= g.cols) continue;
+        const double z = (*remaining)[in[k]].z;
+        const int r = std::min(rows - 1, int(z / cell));
+        ++counts[std::size_t(r) * g.cols + c];
+        z_lo = std::min(z_lo, z);
+        z_hi = std::max(z_hi, z);
+        ++points;
+      }
+      // Furniture faces are vertical planes too, but they do not span the room
+      // from floor to ceiling.
+      if (z_hi - z_lo < p.min_wall_height_fraction * ceiling_height) continue;
+      g.occupied.assign(counts.size(), 0);
+      for (std::size_t i = 0; i < counts.size(); ++i)
+        g.occupied[i] = counts[i] >= p.min_cell_points ? 1 : 0;
+      // A single empty cell between two wall cells is sampling sparsity on a
+      // far or grazing wall, not a hole; filling it keeps hole rectangles from
+      // leaking into the wall through such pinholes.
+      const std::vector<std::uint8_t> raw = g.occupied;
+      auto raw_occ = [&](int c, int r) { return raw[std::size_t(r) * g.cols + c] != 0; };
+      for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < g.cols; ++c) {
+          if (raw_occ(c, r)) continue;
+          const bool h = c > 0 && c + 1 < g.cols && raw_occ(c - 1, r) && raw_occ(c + 1, r);
+          const bool v = r > 0 && r + 1 < rows && raw_occ(c, r - 1) && raw_occ(c, r + 1);
+          if (h || v) g.occupied[std::size_t(r) * g.cols + c] = 1;
+        }
+      g.los.assign(g.occupied.size(), -1);
+
+      const int wall_index = int(rep.walls.size());
+      DetectedWall w;
+      w.normal = frame.normal;
+      w.offset = plane.d;
+      w.u_axis = frame.u_axis;
+      w.u_min = g.u0;
+      w.u_max = g.u0 + g.cols * cell;
+      w.points = points;
+      rep.walls.push_back(w);
+
+      std::vector<CellRect> cands = find_hole_candidates(g, ceiling_height, p);
+      rep.candidates += cands.size();
+      // Largest first: where a true opening and a shadow beside it form both a
+      // small and a large rectangle, the LOS test decides which one survives.
+      std::stable_sort(cands.begin(), cands.end(),
+                       [](const CellRect& a, const CellRect& b) { return a.area() > b.area(); });
+      std::vector<CellRect> kept;
+      for (const CellRect& r : cands) {
+        bool overlaps = false;
+        for (const CellRect& k : kept) overlaps = overlaps || k.overlaps(r);
+        if (overlaps) continue;
+        const double los = los_fraction(g, frame, r, tree, scanner_positions, margin, rep.los_rays);
+        const bool confirmed =
+            los + 1e-12 >= p.los_min_fraction ||
+            (p.partly_hidden_min_los > 0 && los + 1e-12 >= p.partly_hidden_min_los &&
+             seen_cells_span_rect(g, r));
+        if (confirmed) {
+          kept.push_back(r);
+          result.push_back(make_opening(g, frame, r, los, wall_index));
+        } else {
+          rep.rejected.push_back(make_opening(g, frame, r, los, wall_index));
+        }
+      }
+    }
+    remaining = rest;
+  }
+  return result;
+}
+
+std::size_t label_openings(SemiOcTree& tree, const std::vector<DetectedOpening>& openings) {
+  std::set<std::tuple<unsigned, unsigned, unsigned>> done;
+  std::size_t labelled = 0;
+  // Half-leaf sampling of the rectangle reaches every leaf the plane passes
+  // through, also where the wall is not aligned with the grid.
+  const double step = 0.5 * tree.leaf_size();
+  for (const DetectedOpening& o : openings) {
+    const Eigen::Vector3d along = o.corners[1] - o.corners[0];
+    const Eigen::Vector3d up = o.corners[3] - o.corners[0];
+    const int nu = std::max(1, int(std::ceil(along.norm() / step)));
+    const int nv = std::max(1, int(std::ceil(up.norm() / step)));
+    for (int i = 0; i < nu; ++i)
+      for (int j = 0; j < nv; ++j) {
+        const Eigen::Vector3d q = o.corners[0] + along * ((i + 0.5) / nu) + up * ((j + 0.5) / nv);
+        octomap::OcTreeKey key;
+        if (!tree.key_of(Point3(q.x(), q.y(), q.z()), key)) continue;
+        if (!done.insert({key[0], key[1], key[2]}).second) continue;
+        const auto oct = tree.find_octant(key);
+        if (oct && oct->label() == Label::kOccupied) continue;
+        tree.set_label(key, tree.coarse_level(), label_of(o.kind));
+        ++labelled;
+      }
+  }
+  return labelled;
+}
+
+}  // namespace semioctree

@@ -1,0 +1,2 @@
+semioctree_add_test(test_openings SOURCES test_openings.cpp LIBS semioctree semioctree_sim)
+target_include_directories(test_openings PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})

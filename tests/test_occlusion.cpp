@@ -1,0 +1,153 @@
+// Occlusion study (paper 2.2.3): shadows behind obstacles at leaf resolution,
+// space seen through a door is out, a second scanner position un-occludes
+// what it sees, coarse space stays coarse.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "semioctree/discretize.h"
+#include "semioctree/occlusion.h"
+
+namespace semioctree {
+namespace {
+
+// A 4 × 4 × 2.4 m room (walls only, as after preprocessing) with a
+// 0.6 × 0.6 × 1.6 m pillar at [2, 2.6) × [1.7, 2.3), as surface points.
+Cloud room_with_pillar(double step = 0.02) {
+  Cloud c;
+  auto add = [&](double x, double y, double z) {
+    c.push_back(pcl::PointXYZ{float(x), float(y), float(z)});
+  };
+  for (double z = step; z < 2.4; z += step) {
+    for (double t = 0; t <= 4.0; t += step) {
+      add(t, 0.01, z);
+      add(t, 3.99, z);
+      add(0.01, t, z);
+      add(3.99, t, z);
+    }
+    if (z < 1.6)
+      for (double t = 0; t < 0.6; t += step) {
+        add(2.0 + t, 1.7, z);
+        add(2.0 + t, 2.29, z);
+        add(2.0, 1.7 + t, z);
+        add(2.59, 1.7 + t, z);
+      }
+  }
+  return c;
+}
+
+// Does the segment a→b pass through the pillar's box (slab test)?
+bool hits_pillar(const Point3& a, const Point3& b) {
+  const double lo[3] = {2.0, 1.7, 0.0}, hi[3] = {2.6, 2.3, 1.6};
+  double t0 = 0, t1 = 1;
+  for (int i = 0; i < 3; ++i) {
+    const double d = b[i] - a[i];
+    if (std::fabs(d) < 1e-12) {
+      if (a[i] < lo[i] || a[i] > hi[i]) return false;
+      continue;
+    }
+    double ta = (lo[i] - a[i]) / d, tb = (hi[i] - a[i]) / d;
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+  }
+  return t0 <= t1;
+}
+
+Label label_at(const SemiOcTree& t, const Point3& p) {
+  const auto o = t.find_octant(p);
+  return o ? o->label() : Label::kUnknown;
+}
+
+TEST(Occlusion, ShadowBehindAnObstacleMatchesGeometryWithinOneLeaf) {
+  const auto tree = discretize(room_with_pillar(), 2.4, {0.05, 0.8});
+  ScannerView view{Point3(1.0, 2.0, 1.2)};
+  view.elevation_min_deg = -90;  // no blind spot below the scanner: pure geometry
+  view.min_range = 0;
+  const OcclusionReport rep = study_occlusion(*tree, {view});
+  EXPECT_GT(rep.occluded, 0u);
+  EXPECT_GT(rep.octants_split, 0u);
+  const double r = tree->leaf_size();
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> ux(0.1, 3.9), uz(0.1, 2.3);
+  int checked = 0, shadow = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const Point3 p(ux(rng), ux(rng), uz(rng));
+    if (p.x > 1.95 && p.x < 2.65 && p.y > 1.65 && p.y < 2.35 && p.z < 1.65)
+      continue;  // in/at the pillar
+    const bool hidden = hits_pillar(view.position, p);
+    // Skip points within 1.5 leaves of the shadow's boundary.
+    bool near_boundary = false;
+    for (int d = 0; d < 26 && !near_boundary; ++d) {
+      const int dx = d % 3 - 1, dy = (d / 3) % 3 - 1, dz = d / 9 - 1;
+      const Point3 q(p.x + 1.5 * r * dx, p.y + 1.5 * r * dy, p.z + 1.5 * r * dz);
+      near_boundary = hits_pillar(view.position, q) != hidden;
+    }
+    if (near_boundary) continue;
+    const Label l = label_at(*tree, p);
+    if (l == Label::kOccupied) continue;
+    ASSERT_EQ(l, hidden ? Label::kOccluded : Label::kEmpty)
+        << "at (" << p.x << ", " << p.y << ", " << p.z << ")";
+    ++checked;
+    shadow += hidden;
+  }
+  EXPECT_GT(checked, 15000);
+  EXPECT_GT(shadow, 300);
+  // Space far from any boundary stays coarse: the octant at the scanner is big.
+  EXPECT_LE(tree->find_octant(Point3(0.5, 0.5, 0.5))->level, 1u);
+}
+
+TEST(Occlusion, SecondScannerUnoccludesWhatItSees) {
+  const auto tree = discretize(room_with_pillar(), 2.4, {0.05, 0.8});
+  const ScannerView first{Point3(1.0, 2.0, 1.2)}, second{Point3(3.4, 2.0, 1.2)};
+  study_occlusion(*tree, {first});
+  const Point3 behind(2.9, 2.0, 0.8);  // behind the pillar from the first, in front of the second
+  EXPECT_EQ(label_at(*tree, behind), Label::kOccluded);
+  OcclusionParams again;
+  again.only_occluded = true;
+  const OcclusionReport rep = study_occlusion(*tree, {first, second}, again);
+  EXPECT_EQ(label_at(*tree, behind), Label::kEmpty);
+  EXPECT_GT(rep.empty, 0u);
+  // What neither sees stays occluded: right behind the pillar's corner, low down, from both.
+  std::size_t still = 0;
+  tree->for_each_octant([&](const Octant& o) { still += o.label() == Label::kOccluded; });
+  EXPECT_GT(still, 0u);
+}
+
+TEST(Occlusion, SpaceSeenThroughADoorIsOut) {
+  // Wall at x = 2 with a door 1 m wide, 2 m high; the scanner on one side.
+  Cloud c;
+  for (double y = 0; y < 4; y += 0.02)
+    for (double z = 0.02; z < 2.4; z += 0.02)
+      if (!(y >= 1.5 && y < 2.5 && z < 2.0)) c.push_back(pcl::PointXYZ{2.01f, float(y), float(z)});
+  c.push_back(pcl::PointXYZ{0.01f, 0.01f, 0.01f});
+  c.push_back(pcl::PointXYZ{3.99f, 3.99f, 0.01f});
+  const auto tree = discretize(c, 2.4, {0.05, 0.8});
+  // Label the door's leaves in the wall plane (as the openings stage does).
+  for (double y = 1.525; y < 2.5; y += 0.05)
+    for (double z = 0.025; z < 2.0; z += 0.05) {
+      octomap::OcTreeKey k;
+      tree->key_of({2.025, y, z}, k);
+      tree->set_label(k, tree->coarse_level(), Label::kDoor);
+    }
+  study_occlusion(*tree, {ScannerView{Point3(1.0, 2.0, 1.2)}});
+  EXPECT_EQ(label_at(*tree, Point3(3.0, 2.0, 1.0)), Label::kOut);       // straight through the door
+  EXPECT_EQ(label_at(*tree, Point3(3.0, 0.3, 1.0)), Label::kOccluded);  // behind the wall
+  EXPECT_EQ(label_at(*tree, Point3(1.0, 0.5, 1.0)), Label::kEmpty);     // this side
+  EXPECT_EQ(label_at(*tree, Point3(2.025, 2.0, 1.0)), Label::kDoor);    // doors stay doors
+}
+
+TEST(Occlusion, RangeAndElevationLimits) {
+  const auto tree = discretize(room_with_pillar(), 2.4, {0.05, 0.8});
+  ScannerView v{Point3(1.0, 2.0, 1.2)};
+  v.max_range = 1.0;
+  v.elevation_min_deg = -30;
+  study_occlusion(*tree, {v});
+  EXPECT_EQ(label_at(*tree, Point3(1.0, 2.8, 1.2)), Label::kEmpty);     // 0.8 m away, level
+  EXPECT_EQ(label_at(*tree, Point3(1.0, 2.3, 1.2)), Label::kOccluded);  // closer than 0.6 m
+  EXPECT_EQ(label_at(*tree, Point3(3.5, 3.5, 1.2)), Label::kOccluded);  // out of range
+  EXPECT_EQ(label_at(*tree, Point3(1.0, 2.1, 0.3)), Label::kOccluded);  // below -30°, blind spot
+}
+
+}  // namespace
+}  // namespace semioctree
