@@ -10,6 +10,8 @@
 #include "commands.h"
 #include "semioctree/discretize.h"
 #include "semioctree/figures.h"
+#include "semioctree/occlusion.h"
+#include "semioctree/openings.h"
 #include "semioctree/outputs.h"
 #ifdef SEMIOCTREE_HAVE_SIM
 #include "sim_input.h"
@@ -30,8 +32,9 @@ void add_compare_command(CLI::App& app) {
   auto o = std::make_shared<Options>();
   auto* cmd = app.add_subcommand(
       "compare",
-      "Discretize one scan with the semioctree and with the homogeneous grid at several "
-      "resolutions; write the paper's Table 1, Table 2 and Fig 15 (comparison.json, "
+      "Discretize and classify one scan (doors, windows, occlusion study) with the semioctree "
+      "and with the homogeneous grid at several resolutions; write the paper's Table 1, Table 2 "
+      "and Fig 15 (comparison.json, "
       "comparison.md, fig15_octants.png) and a slice image per run.");
   auto* cloud_opt =
       cmd->add_option("--cloud", o->input.files, "point cloud (.pcd, .ply, .xyz, .ptx)")
@@ -74,7 +77,12 @@ void add_compare_command(CLI::App& app) {
         p.extent_snap = o->coarse;  // both methods cover the same region
         const auto t0 = std::chrono::steady_clock::now();
         const auto tree = discretize(*cloud.pre.cloud, cloud.pre.ceiling_height, p);
-        tree->prune();
+        // Table 1 needs every class: doors and windows, then the occlusion study.
+        label_openings(*tree, detect_openings(*cloud.pre.cloud, cloud.pre.ceiling_height, *tree,
+                                              cloud.scanners));
+        std::vector<ScannerView> views;
+        for (const Point3& s : cloud.scanners) views.push_back(ScannerView{s});
+        study_occlusion(*tree, views);
         DiscretizationRun run;
         run.method = method;
         run.leaf = leaf;
