@@ -7,6 +7,8 @@
 
 #include "semioctree/discretize.h"
 #include "semioctree/occlusion.h"
+#include "semioctree/openings.h"
+#include "semioctree/preprocess.h"
 
 namespace semioctree {
 namespace {
@@ -147,6 +149,45 @@ TEST(Occlusion, RangeAndElevationLimits) {
   EXPECT_EQ(label_at(*tree, Point3(1.0, 2.3, 1.2)), Label::kOccluded);  // closer than 0.6 m
   EXPECT_EQ(label_at(*tree, Point3(3.5, 3.5, 1.2)), Label::kOccluded);  // out of range
   EXPECT_EQ(label_at(*tree, Point3(1.0, 2.1, 0.3)), Label::kOccluded);  // below -30°, blind spot
+}
+
+}  // namespace
+}  // namespace semioctree
+
+namespace semioctree {
+namespace {
+
+TEST(Occlusion, RealScanClassificationIsPlausible) {
+  const auto scans = read_scans(std::string(SEMIOCTREE_SHARED_DIR) + "/data/real/room_scan1.pcd");
+  const PreprocessResult pre = preprocess(*scans[0].points);
+  const auto tree = discretize(*pre.cloud, pre.ceiling_height, {0.1, 0.8});
+  const Eigen::Vector3d o = pre.transform * Eigen::Vector3d::Zero();  // the scanner
+  const Point3 scanner(o.x(), o.y(), o.z());
+  label_openings(*tree, detect_openings(*pre.cloud, pre.ceiling_height, *tree, {scanner}));
+  const OcclusionReport rep = study_occlusion(*tree, {ScannerView{scanner}});
+  const auto st = tree->statistics();
+  EXPECT_GT(st.with_label(Label::kOccupied), 3000u);
+  EXPECT_GT(st.volume[int(Label::kEmpty)], 20.0);     // m³ seen around the scanner
+  EXPECT_GT(st.volume[int(Label::kOccluded)], 20.0);  // and space hidden behind things
+  EXPECT_EQ(st.with_label(Label::kUnknown), 0u);
+  EXPECT_GT(rep.octants_split, 100u);
+  // Right behind an occupied leaf, seen from the scanner, space is occluded:
+  // step 0.3 m further along the ray of a few occupied leaves.
+  int behind_occluded = 0, tried = 0;
+  tree->for_each_octant([&](const Octant& oc) {
+    if (oc.label() != Label::kOccupied || tried >= 200 || (oc.key.k[0] + oc.key.k[1]) % 7) return;
+    const double dx = oc.center.x - scanner.x, dy = oc.center.y - scanner.y,
+                 dz = oc.center.z - scanner.z;
+    const double n = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const Point3 p(oc.center.x + 0.3 * dx / n, oc.center.y + 0.3 * dy / n,
+                   oc.center.z + 0.3 * dz / n);
+    const auto b = tree->find_octant(p);
+    if (!b || b->label() == Label::kOccupied) return;
+    ++tried;
+    behind_occluded += b->label() == Label::kOccluded;
+  });
+  EXPECT_GT(tried, 50);
+  EXPECT_GT(behind_occluded, tried * 7 / 10) << behind_occluded << " of " << tried;
 }
 
 }  // namespace
