@@ -4,7 +4,7 @@
 // boxes), answered by SemiOcTree::traverse and by OctoMap's computeRayKeys +
 // search on an OcTree holding the same map, in one run. Prints JSON.
 //
-//   bench_traversal [--segments N] [--seed S] [--rounds R] [--skip-octomap]
+//   bench_traversal [--segments N] [--seed S] [--rounds R] [--map walls|furnished] [--skip-octomap]
 #include <octomap/OcTree.h>
 
 #include <algorithm>
@@ -41,18 +41,27 @@ void occupy_box_surface(SemiOcTree& tree, double x0, double y0, double z0, doubl
       }
 }
 
-SemiOcTree build_room(double leaf, double coarse) {
+// "walls": the map, occupied leaves on the four walls (floor and
+// ceiling points are removed by preprocessing). "furnished": also floor,
+// ceiling and three pieces of furniture (more split voxels, a harder case).
+SemiOcTree build_room(double leaf, double coarse, bool furnished) {
   SemiOcTree tree(leaf, coarse);
   const double L = tree.coarse_size();
   // Coarse voxels over the room and one voxel around it, all empty.
   for (int i = -1; i * L < 10.0 + L; ++i)
     for (int j = -1; j * L < 8.0 + L; ++j)
       for (int l = -1; l * L < 3.0 + L; ++l) tree.create_coarse({i, j, l}, Label::kEmpty);
-  // The room's shell, one leaf thick, and three pieces of furniture.
-  occupy_box_surface(tree, -0.05, -0.05, -0.05, 10.05, 8.05, 3.05);
-  occupy_box_surface(tree, 2.0, 2.0, 0.0, 4.0, 3.0, 0.9);
-  occupy_box_surface(tree, 6.0, 1.0, 0.0, 7.0, 5.0, 2.0);
-  occupy_box_surface(tree, 4.5, 6.0, 0.0, 5.0, 6.5, 3.0);
+  // Walls one leaf thick, just outside the room.
+  occupy_box_surface(tree, -0.05, -0.05, 0.0, 0.0, 8.05, 3.0);
+  occupy_box_surface(tree, 10.0, -0.05, 0.0, 10.05, 8.05, 3.0);
+  occupy_box_surface(tree, -0.05, -0.05, 0.0, 10.05, 0.0, 3.0);
+  occupy_box_surface(tree, -0.05, 8.0, 0.0, 10.05, 8.05, 3.0);
+  if (furnished) {
+    occupy_box_surface(tree, -0.05, -0.05, -0.05, 10.05, 8.05, 3.05);
+    occupy_box_surface(tree, 2.0, 2.0, 0.0, 4.0, 3.0, 0.9);
+    occupy_box_surface(tree, 6.0, 1.0, 0.0, 7.0, 5.0, 2.0);
+    occupy_box_surface(tree, 4.5, 6.0, 0.0, 5.0, 6.5, 3.0);
+  }
   return tree;
 }
 
@@ -66,7 +75,8 @@ int main(int argc, char** argv) {
   std::size_t n = 1000000;
   unsigned seed = 1;
   int rounds = 3;
-  bool skip_octomap = false;  // for profiling our traversal alone
+  bool skip_octomap = false;
+  bool furnished = false;  // for profiling our traversal alone
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--segments") && i + 1 < argc)
       n = std::strtoul(argv[++i], nullptr, 10);
@@ -74,16 +84,21 @@ int main(int argc, char** argv) {
       seed = unsigned(std::strtoul(argv[++i], nullptr, 10));
     else if (!std::strcmp(argv[i], "--rounds") && i + 1 < argc)
       rounds = std::max(1, std::atoi(argv[++i]));
+    else if (!std::strcmp(argv[i], "--map") && i + 1 < argc &&
+             (!std::strcmp(argv[i + 1], "walls") || !std::strcmp(argv[i + 1], "furnished")))
+      furnished = !std::strcmp(argv[++i], "furnished");
     else if (!std::strcmp(argv[i], "--skip-octomap"))
       skip_octomap = true;
     else {
-      std::fprintf(stderr, "usage: %s [--segments N] [--seed S] [--rounds R] [--skip-octomap]\n",
+      std::fprintf(stderr,
+                   "usage: %s [--segments N] [--seed S] [--rounds R] [--map walls|furnished] "
+                   "[--skip-octomap]\n",
                    argv[0]);
       return 2;
     }
   }
   std::fprintf(stderr, "building the room map ...\n");
-  SemiOcTree semi = build_room(0.05, 0.8);
+  SemiOcTree semi = build_room(0.05, 0.8, furnished);
   semi.prune();
   semi.compact();
   const auto octo = semioctree::to_occupancy_octree(semi);
@@ -160,6 +175,7 @@ int main(int argc, char** argv) {
   std::printf(
       "{\n"
       "  \"benchmark\": \"segment visibility, 10 x 8 x 3 m room, r = 0.05 m, L = 0.8 m\",\n"
+      "  \"map\": \"%s\",\n"
       "  \"segments\": %zu,\n"
       "  \"blocked_segments\": %zu,\n"
       "  \"answers_agree\": %zu,\n"
@@ -171,8 +187,9 @@ int main(int argc, char** argv) {
       "  \"rounds\": %d,\n  \"speedup_same_question\": %.2f,\n"
       "  \"speedup_worst_round\": %.2f\n"
       "}\n",
-      n, blocked_count, agree, semi_s, semi_steps, semi_steps / semi_s, n / semi_s,
-      static_cast<unsigned long long>(stats.total()), octo_s, octo_steps, octo_steps / octo_s,
-      n / octo_s, octo->size(), rounds, octo_s / semi_s, worst_ratio);
+      furnished ? "furnished" : "walls", n, blocked_count, agree, semi_s, semi_steps,
+      semi_steps / semi_s, n / semi_s, static_cast<unsigned long long>(stats.total()), octo_s,
+      octo_steps, octo_steps / octo_s, n / octo_s, octo->size(), rounds, octo_s / semi_s,
+      worst_ratio);
   return 0;
 }

@@ -396,9 +396,9 @@ void SemiOcTree::clear() {
 
 void SemiOcTree::compact() {
   if (!root) return;
-  // Copy breadth-first into fresh, consecutive node memory: all coarse voxels
-  // end up side by side (nearly every traversal step touches one first), and
-  // the 8 children of a node next to each other.
+  // Copy into fresh, consecutive node memory: all coarse voxels side by side
+  // (nearly every traversal step touches one first), each voxel's octree in a
+  // block of its own, and the 8 children of a node next to each other.
   struct FreshNodes {
     FreshNodes() { node_pool().begin_fresh(); }
     ~FreshNodes() { node_pool().end_fresh(); }
@@ -408,20 +408,30 @@ void SemiOcTree::compact() {
   fresh.root = new SemiOcTreeNode();
   fresh.tree_size = 1;
   fresh.root->copyData(*root);
-  std::vector<std::pair<const SemiOcTreeNode*, SemiOcTreeNode*>> level{{root, fresh.root}}, next;
-  while (!level.empty()) {
-    next.clear();
-    for (const auto& [from, to] : level) {
-      if (!nodeHasChildren(from)) continue;
-      for (unsigned i = 0; i < 8; ++i) {
-        if (!nodeChildExists(from, i)) continue;
-        SemiOcTreeNode* child = fresh.createNodeChild(to, i);
-        child->copyData(*getNodeChild(from, i));
-        next.emplace_back(getNodeChild(from, i), child);
+  using Pair = std::pair<const SemiOcTreeNode*, SemiOcTreeNode*>;
+  // Copies the children of every node in `level`, level by level, down to
+  // `stop_depth` levels below; returns the deepest level copied.
+  auto copy_levels = [&](std::vector<Pair> level, unsigned levels) {
+    std::vector<Pair> next;
+    for (unsigned d = 0; d < levels && !level.empty(); ++d) {
+      next.clear();
+      for (const auto& [from, to] : level) {
+        if (!nodeHasChildren(from)) continue;
+        for (unsigned i = 0; i < 8; ++i) {
+          if (!nodeChildExists(from, i)) continue;
+          SemiOcTreeNode* child = fresh.createNodeChild(to, i);
+          child->copyData(*getNodeChild(from, i));
+          next.emplace_back(getNodeChild(from, i), child);
+        }
       }
+      level.swap(next);
     }
-    level.swap(next);
-  }
+    return level;
+  };
+  // The grid down to the coarse voxels first, then each coarse voxel's own
+  // octree in one block: a ray crossing a split voxel finds its nodes together.
+  const std::vector<Pair> coarse = copy_levels({{root, fresh.root}}, coarse_depth());
+  for (const Pair& c : coarse) copy_levels({c}, coarse_level_);
   std::swap(root, fresh.root);
   std::swap(tree_size, fresh.tree_size);
   size_changed = true;

@@ -202,12 +202,6 @@ TraversalEnd SemiOcTree::traverse(const Point3& a, const Point3& b, Visitor&& vi
     const SemiOcTreeNode* node =
         coarse_.find((std::uint64_t(key.k[0] >> k) << 32) | (std::uint64_t(key.k[1] >> k) << 16) |
                      std::uint64_t(key.k[2] >> k));
-    if (exits) {  // fetch the next coarse voxel's slot while this one is handled
-      std::uint64_t next[3];
-      for (int i = 0; i < 3; ++i)
-        next[i] = std::uint64_t((cc[i] + ((exits >> i) & 1u ? f.dir[i] : 0)) * span + 32768) >> k;
-      coarse_.prefetch((next[0] << 32) | (next[1] << 16) | next[2]);
-    }
     if (node && k > 0 && nodeHasChildren(node)) {
       if (!traverse_children(f, node, 0, base, t_in, p_in, t_out, p_out, visit))
         return TraversalEnd::kStopped;
