@@ -136,6 +136,17 @@ double volume_percent(const OctantStatistics& s, Label l) {
   return total > 0 ? 100.0 * s.volume[std::size_t(l)] / total : 0.0;
 }
 
+DiscretizationRun describe_run(const SemiOcTree& tree, double seconds) {
+  DiscretizationRun run;
+  run.method = tree.coarse_level() == 0 ? "homogeneous" : "semioctree";
+  run.leaf = tree.leaf_size();
+  run.coarse = tree.coarse_size();
+  run.stats = tree.statistics();
+  run.memory_bytes = tree.memory_bytes();
+  run.seconds = seconds;
+  return run;
+}
+
 void write_run_json(const DiscretizationRun& run, const std::string& path) {
   json j = run_json(run);
   j["format"] = "semioctree-stats";

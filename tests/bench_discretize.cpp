@@ -2,7 +2,7 @@
 // ~400 000 points, as in the paper) at 0.8 → 0.05 m, the semioctree against
 // the homogeneous grid over the same region, in one run. Prints JSON.
 //
-//   bench_discretize [--scene FILE] [--rounds R]
+//   bench_discretize [--rounds R]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -13,10 +13,7 @@
 
 #include "semioctree/discretize.h"
 #include "semioctree/preprocess.h"
-#include "semioctree/sim/geometry.h"
-#include "semioctree/sim/raycaster.h"
-#include "semioctree/sim/scanner.h"
-#include "semioctree/sim/scene.h"
+#include "support/lab_scan.h"
 
 using namespace semioctree;
 
@@ -27,25 +24,18 @@ double since(std::chrono::steady_clock::time_point t0) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string scene_path = std::string(SEMIOCTREE_SOURCE_DIR) + "/sim/scenes/lab.scene.json";
   int rounds = 3;
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--scene") && i + 1 < argc)
-      scene_path = argv[++i];
-    else if (!std::strcmp(argv[i], "--rounds") && i + 1 < argc)
+    if (!std::strcmp(argv[i], "--rounds") && i + 1 < argc)
       rounds = std::max(1, std::atoi(argv[++i]));
     else {
-      std::fprintf(stderr, "usage: %s [--scene FILE] [--rounds R]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--rounds R]\n", argv[0]);
       return 2;
     }
   }
-  std::fprintf(stderr, "scanning %s ...\n", scene_path.c_str());
-  const sim::Scene scene = sim::load_scene(scene_path);
-  const auto caster = sim::make_ray_caster(sim::tessellate(scene));
-  const sim::Scan s =
-      sim::scan(*caster, scene.scanner, {scene.robot.start.x(), scene.robot.start.y(), 0.0});
-  Cloud cloud;
-  for (const auto& p : s.points) cloud.push_back(pcl::PointXYZ{p.x(), p.y(), p.z()});
+  std::fprintf(stderr, "scanning the lab ...\n");
+  const testing::LabScan lab = testing::scan_lab();
+  const Cloud& cloud = lab.world;
 
   PreprocessParams pp;
   pp.target_points = 400000;
@@ -88,7 +78,7 @@ int main(int argc, char** argv) {
       "  \"octant_ratio\": %.2f,\n"
       "  \"discretize_speedup\": %.2f,\n"
       "  \"preprocess_plus_discretize_speedup\": %.2f\n}\n",
-      s.points.size(), kept, rounds, pre_best, semi_best,
+      lab.world.size(), kept, rounds, pre_best, semi_best,
       static_cast<unsigned long long>(semi_octants), semi_mem, homo_best,
       static_cast<unsigned long long>(homo_octants), homo_mem,
       double(homo_octants) / double(semi_octants), homo_best / semi_best,

@@ -17,10 +17,7 @@
 #include "semioctree/discretize.h"
 #include "semioctree/occlusion.h"
 #include "semioctree/preprocess.h"
-#include "semioctree/sim/geometry.h"
-#include "semioctree/sim/raycaster.h"
-#include "semioctree/sim/scanner.h"
-#include "semioctree/sim/scene.h"
+#include "support/lab_scan.h"
 
 using namespace semioctree;
 
@@ -40,21 +37,12 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  const sim::Scene scene =
-      sim::load_scene(std::string(SEMIOCTREE_SOURCE_DIR) + "/sim/scenes/lab.scene.json");
-  const auto caster = sim::make_ray_caster(sim::tessellate(scene));
-  const sim::Scan s =
-      sim::scan(*caster, scene.scanner, {scene.robot.start.x(), scene.robot.start.y(), 0.0});
-  Cloud raw;
-  const Eigen::Isometry3d to_world = s.sensor_to_world();
-  for (const auto& p : s.points) {
-    const Eigen::Vector3d w = to_world * p.cast<double>();
-    raw.push_back(pcl::PointXYZ{float(w.x()), float(w.y()), float(w.z())});
-  }
+  const testing::LabScan lab = testing::scan_lab();
+  const Cloud& raw = lab.world;
   PreprocessParams pp;
   pp.target_points = 400000;
   const PreprocessResult pre = preprocess(raw, pp);
-  const Eigen::Vector3d origin = pre.transform * s.origin();
+  const Eigen::Vector3d origin = pre.transform * lab.origin;
   const ScannerView view{Point3(origin.x(), origin.y(), origin.z())};
   octomap::Pointcloud octo_cloud;
   for (const auto& p : *pre.cloud) octo_cloud.push_back(p.x, p.y, p.z);

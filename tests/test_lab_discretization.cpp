@@ -6,26 +6,14 @@
 #include "semioctree/discretize.h"
 #include "semioctree/figures.h"
 #include "semioctree/preprocess.h"
-#include "semioctree/sim/geometry.h"
-#include "semioctree/sim/raycaster.h"
-#include "semioctree/sim/scanner.h"
-#include "semioctree/sim/scene.h"
+#include "support/lab_scan.h"
 
 namespace semioctree {
 namespace {
 
 TEST(LabDiscretization, SemioctreeNeedsFarFewerOctants) {
-  const sim::Scene scene =
-      sim::load_scene(std::string(SEMIOCTREE_SOURCE_DIR) + "/sim/scenes/lab.scene.json");
-  const auto caster = sim::make_ray_caster(sim::tessellate(scene));
-  const sim::Scan s =
-      sim::scan(*caster, scene.scanner, {scene.robot.start.x(), scene.robot.start.y(), 0.0});
-  Cloud cloud;
-  const Eigen::Isometry3d to_world = s.sensor_to_world();
-  for (const auto& p : s.points) {
-    const Eigen::Vector3d w = to_world * p.cast<double>();
-    cloud.push_back(pcl::PointXYZ{float(w.x()), float(w.y()), float(w.z())});
-  }
+  const testing::LabScan lab = testing::scan_lab();
+  const Cloud& cloud = lab.world;
   PreprocessParams pp;
   pp.target_points = 400000;
   const PreprocessResult pre = preprocess(cloud, pp);

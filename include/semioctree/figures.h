@@ -21,6 +21,9 @@ struct DiscretizationRun {
   double seconds = 0;
 };
 
+// A run's figures from its tree (method from the tree: k = 0 is the homogeneous grid).
+DiscretizationRun describe_run(const SemiOcTree& tree, double seconds);
+
 // Volume % per label over all labelled octants (Table 1 columns).
 double volume_percent(const OctantStatistics& s, Label l);
 

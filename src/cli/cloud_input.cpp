@@ -2,8 +2,12 @@
 
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 
 #include "semioctree/scan_io.h"
+#ifdef SEMIOCTREE_HAVE_SIM
+#include "sim_input.h"
+#endif
 
 namespace semioctree::cli {
 
@@ -60,7 +64,25 @@ PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& param
   return out;
 }
 
-void add_preprocess_options(CLI::App& cmd, PreprocessParams& p) {
+void add_scan_source_options(CLI::App& cmd, ScanSource& src, const std::string& pose_help) {
+  auto* cloud_opt =
+      cmd.add_option("--cloud", src.input.files,
+                     "point cloud: .pcd, .ply, .xyz/.txt or .ptx (repeat for several)")
+          ->check(CLI::ExistingFile);
+  cmd.add_option("--pose", src.input.poses, pose_help);
+  cmd.add_option("--pose-file", src.input.pose_file,
+                 "JSON pose {\"x\",\"y\",\"z\",\"yaw_deg\"} for a single --cloud")
+      ->check(CLI::ExistingFile);
+#ifdef SEMIOCTREE_HAVE_SIM
+  cmd.add_option("--scene", src.scene,
+                 "scene file: scan it from the robot's start with the synthetic scanner")
+      ->check(CLI::ExistingFile)
+      ->excludes(cloud_opt);
+  cmd.add_option("--seed", src.seed, "scanner noise seed (with --scene)")->capture_default_str();
+#else
+  (void)cloud_opt;
+#endif
+  auto& p = src.pre;
   cmd.add_option(
          "--target-points", p.target_points,
          "decimate to about this many points (distance filter; the paper keeps ~400000; 0: off)")
@@ -72,6 +94,21 @@ void add_preprocess_options(CLI::App& cmd, PreprocessParams& p) {
          "--sigma-factor", p.sigma_factor,
          "remove points within this many standard deviations of the floor and ceiling peaks")
       ->capture_default_str();
+}
+
+PreparedCloud prepare(const ScanSource& src, const std::string& command) {
+  if (src.input.files.empty() && src.scene.empty())
+    throw std::invalid_argument(command + ": give --cloud FILE or --scene FILE");
+#ifdef SEMIOCTREE_HAVE_SIM
+  if (!src.scene.empty()) return scan_scene_at_start(src.scene, src.seed, src.pre);
+#endif
+  return prepare_clouds(src.input, src.pre);
+}
+
+std::string source_name(const ScanSource& src) {
+  return std::filesystem::path(src.scene.empty() ? src.input.files.front() : src.scene)
+      .filename()
+      .string();
 }
 
 }  // namespace semioctree::cli

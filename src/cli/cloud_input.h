@@ -27,7 +27,22 @@ struct PreparedCloud {
 
 PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& params);
 
-// Adds --target-points / --min-spacing to a command.
-void add_preprocess_options(CLI::App& cmd, PreprocessParams& params);
+// The input of every command that maps scans: --cloud/--pose (real scans), or
+// --scene/--seed (the synthetic scanner, when built with sim/), and the
+// preprocessing options.
+struct ScanSource {
+  CloudInput input;
+  std::string scene;
+  std::uint64_t seed = 1;
+  PreprocessParams pre;
+};
+
+// Adds those options to `cmd` (`pose_help` explains --pose for this command).
+void add_scan_source_options(CLI::App& cmd, ScanSource& src, const std::string& pose_help);
+// Reads (or scans) and preprocesses; throws std::invalid_argument when neither
+// --cloud nor --scene was given.
+PreparedCloud prepare(const ScanSource& src, const std::string& command);
+// The title of a slice image: the input file's name.
+std::string source_name(const ScanSource& src);
 
 }  // namespace semioctree::cli

@@ -13,18 +13,12 @@
 #include "semioctree/occlusion.h"
 #include "semioctree/openings.h"
 #include "semioctree/outputs.h"
-#ifdef SEMIOCTREE_HAVE_SIM
-#include "sim_input.h"
-#endif
 
 namespace semioctree::cli {
 
 void add_classify_command(CLI::App& app) {
   struct Options {
-    CloudInput input;
-    std::string scene;
-    std::uint64_t seed = 1;
-    PreprocessParams pre;
+    ScanSource source;
     DiscretizeParams disc;
     ScannerView limits;
     std::string out;
@@ -38,22 +32,9 @@ void add_classify_command(CLI::App& app) {
       "(the "
       "occlusion study). Doors and windows are detected first (walls by RANSAC, holes confirmed by "
       "line of sight). Writes the files of `discretize` with all classes, and openings.json.");
-  auto* cloud_opt =
-      cmd->add_option("--cloud", o->input.files,
-                      "point cloud: .pcd, .ply, .xyz/.txt or .ptx (repeat for several)")
-          ->check(CLI::ExistingFile);
-  cmd->add_option("--pose", o->input.poses,
-                  "scanner pose X,Y,Z[,YAW_DEG] of each --cloud in the survey frame (default: the "
-                  "origin, or the pose stored in a PTX file)");
-#ifdef SEMIOCTREE_HAVE_SIM
-  cmd->add_option("--scene", o->scene,
-                  "scene file: scan it from the robot's start with the synthetic scanner")
-      ->check(CLI::ExistingFile)
-      ->excludes(cloud_opt);
-  cmd->add_option("--seed", o->seed, "scanner noise seed (with --scene)")->capture_default_str();
-#else
-  (void)cloud_opt;
-#endif
+  add_scan_source_options(*cmd, o->source,
+                          "scanner pose X,Y,Z[,YAW_DEG] of each --cloud in the survey frame "
+                          "(default: the origin, or the pose stored in a PTX file)");
   cmd->add_option("--leaf", o->disc.leaf, "leaf (finest octant) size r in metres")
       ->capture_default_str();
   cmd->add_option("--coarse", o->disc.coarse, "coarse voxel size L = r*2^k in metres")
@@ -71,18 +52,9 @@ void add_classify_command(CLI::App& app) {
   cmd->add_option("--out", o->out, "output directory")->required();
   cmd->add_option("--slice-height", o->slice_height,
                   "height of the slice image in metres above the floor (default: scanner height)");
-  add_preprocess_options(*cmd, o->pre);
   cmd->callback([o] {
     SemiOcTree::coarse_level_for(o->disc.leaf, o->disc.coarse);
-    if (o->input.files.empty() && o->scene.empty())
-      throw std::invalid_argument("classify: give --cloud FILE or --scene FILE");
-    PreparedCloud cloud;
-#ifdef SEMIOCTREE_HAVE_SIM
-    if (!o->scene.empty())
-      cloud = scan_scene_at_start(o->scene, o->seed, o->pre);
-    else
-#endif
-      cloud = prepare_clouds(o->input, o->pre);
+    const PreparedCloud cloud = prepare(o->source, "classify");
     auto t0 = std::chrono::steady_clock::now();
     const auto tree = discretize(*cloud.pre.cloud, cloud.pre.ceiling_height, o->disc);
     std::printf("discretize: %zu coarse voxels [%.2f s]\n", tree->coarse_count(),
@@ -109,13 +81,8 @@ void add_classify_command(CLI::App& app) {
     }
     const OcclusionReport rep = study_occlusion(*tree, views);
     tree->compact();
-    DiscretizationRun run;
-    run.method = o->disc.leaf == o->disc.coarse ? "homogeneous" : "semioctree";
-    run.leaf = o->disc.leaf;
-    run.coarse = o->disc.coarse;
-    run.stats = tree->statistics();
-    run.memory_bytes = tree->memory_bytes();
-    run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const DiscretizationRun run = describe_run(
+        *tree, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     std::printf(
         "occlusion study: %zu octants tested, %zu split, %zu segments; empty %.1f %%, occupied "
         "%.1f %%, "

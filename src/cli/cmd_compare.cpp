@@ -13,18 +13,12 @@
 #include "semioctree/occlusion.h"
 #include "semioctree/openings.h"
 #include "semioctree/outputs.h"
-#ifdef SEMIOCTREE_HAVE_SIM
-#include "sim_input.h"
-#endif
 
 namespace semioctree::cli {
 
 void add_compare_command(CLI::App& app) {
   struct Options {
-    CloudInput input;
-    std::string scene;
-    std::uint64_t seed = 1;
-    PreprocessParams pre;
+    ScanSource source;
     std::vector<double> leaves = {0.4, 0.2, 0.1, 0.05};
     double coarse = 0.8;
     std::string out;
@@ -36,38 +30,15 @@ void add_compare_command(CLI::App& app) {
       "and with the homogeneous grid at several resolutions; write the paper's Table 1, Table 2 "
       "and Fig 15 (comparison.json, "
       "comparison.md, fig15_octants.png) and a slice image per run.");
-  auto* cloud_opt =
-      cmd->add_option("--cloud", o->input.files, "point cloud (.pcd, .ply, .xyz, .ptx)")
-          ->check(CLI::ExistingFile);
-  cmd->add_option("--pose", o->input.poses, "scanner pose X,Y,Z[,YAW_DEG] of the cloud");
-#ifdef SEMIOCTREE_HAVE_SIM
-  auto* scene_opt =
-      cmd->add_option("--scene", o->scene,
-                      "scene file: scan it from the robot's start with the synthetic scanner")
-          ->check(CLI::ExistingFile);
-  cmd->add_option("--seed", o->seed, "scanner noise seed (with --scene)")->capture_default_str();
-  scene_opt->excludes(cloud_opt);
-#else
-  (void)cloud_opt;
-#endif
+  add_scan_source_options(*cmd, o->source, "scanner pose X,Y,Z[,YAW_DEG] of the cloud");
   cmd->add_option("--leaves", o->leaves, "leaf sizes to compare, metres")
       ->capture_default_str()
       ->delimiter(',');
   cmd->add_option("--coarse", o->coarse, "coarse voxel size of the semioctree, metres")
       ->capture_default_str();
   cmd->add_option("--out", o->out, "output directory")->required();
-  add_preprocess_options(*cmd, o->pre);
   cmd->callback([o] {
-    if (o->input.files.empty() && o->scene.empty())
-      throw std::invalid_argument("compare: give --cloud FILE or --scene FILE");
-    for (double leaf : o->leaves) SemiOcTree::coarse_level_for(leaf, o->coarse);
-    PreparedCloud cloud;
-#ifdef SEMIOCTREE_HAVE_SIM
-    if (!o->scene.empty())
-      cloud = scan_scene_at_start(o->scene, o->seed, o->pre);
-    else
-#endif
-      cloud = prepare_clouds(o->input, o->pre);
+    const PreparedCloud cloud = prepare(o->source, "compare");
     std::vector<DiscretizationRun> runs;
     for (const char* method : {"semioctree", "homogeneous"}) {
       for (double leaf : o->leaves) {
@@ -83,13 +54,9 @@ void add_compare_command(CLI::App& app) {
         std::vector<ScannerView> views;
         for (const Point3& s : cloud.scanners) views.push_back(ScannerView{s});
         study_occlusion(*tree, views);
-        DiscretizationRun run;
-        run.method = method;
-        run.leaf = leaf;
-        run.coarse = p.coarse;
-        run.stats = tree->statistics();
-        run.memory_bytes = tree->memory_bytes();
-        run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        DiscretizationRun run = describe_run(
+            *tree, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        run.method = method;  // k = 0 at the coarsest leaf would read as homogeneous
         std::printf("%-11s %5.2f → %4.2f m: %9llu octants, %7.1f MB [%.2f s]\n", method, p.coarse,
                     leaf, static_cast<unsigned long long>(run.stats.total()),
                     run.memory_bytes / 1e6, run.seconds);

@@ -1,0 +1,41 @@
+// One synthetic scan of the built-in lab scene from the robot's start, in the
+// world frame: the input of the lab tests and benchmarks.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "semioctree/scan_io.h"
+#include "semioctree/sim/geometry.h"
+#include "semioctree/sim/raycaster.h"
+#include "semioctree/sim/scanner.h"
+#include "semioctree/sim/scene.h"
+
+namespace semioctree::testing {
+
+struct LabScan {
+  Cloud world;             // points, world frame
+  Eigen::Vector3d origin;  // the scanner's optical centre, world frame
+  std::size_t rays = 0;
+};
+
+inline LabScan scan_lab(std::uint64_t seed = 1) {
+  const sim::Scene scene =
+      sim::load_scene(std::string(SEMIOCTREE_SOURCE_DIR) + "/sim/scenes/lab.scene.json");
+  const auto caster = sim::make_ray_caster(sim::tessellate(scene));
+  sim::ScanOptions options;
+  options.seed = seed;
+  const sim::Scan s = sim::scan(*caster, scene.scanner,
+                                {scene.robot.start.x(), scene.robot.start.y(), 0.0}, options);
+  LabScan out;
+  const Eigen::Isometry3d to_world = s.sensor_to_world();
+  for (const auto& p : s.points) {
+    const Eigen::Vector3d w = to_world * p.cast<double>();
+    out.world.push_back(pcl::PointXYZ{float(w.x()), float(w.y()), float(w.z())});
+  }
+  out.origin = s.origin();
+  out.rays = s.rays_cast;
+  return out;
+}
+
+}  // namespace semioctree::testing
