@@ -41,14 +41,17 @@ main_job() {
   # The most complete part of the pipeline that exists so far: the synthetic
   # scanner scans the built-in lab scene from the robot's start; the scan is
   # preprocessed and discretized into a SemiOcTree (all map files written),
-  # then compared with the homogeneous grid (the paper's Table 1, Table 2, Fig 15).
+  # classified (doors, windows, occlusion study), then compared with the
+  # homogeneous grid (the paper's Table 1, Table 2, Fig 15).
   local cli="$BUILD_DIR/semioctree" scene=sim/scenes/lab.scene.json
   mkdir -p survey_out
   "$cli" scene-info "$scene"
   "$cli" discretize --scene "$scene" --target-points 400000 --out survey_out/scan_00
   "$cli" info survey_out/scan_00/semioctree.ot
+  "$cli" classify --scene "$scene" --target-points 400000 --out survey_out/classified
   "$cli" compare --scene "$scene" --target-points 400000 --out survey_out/compare
-  echo "== done: survey_out/scan_00 (map files, slice.png) and survey_out/compare (comparison.md, fig15_octants.png)"
+  echo "== done: survey_out/scan_00 (occupancy), survey_out/classified (all classes, openings.json),"
+  echo "   survey_out/compare (comparison.md, fig15_octants.png)"
 }
 
 run_tests() {
