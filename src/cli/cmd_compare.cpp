@@ -46,6 +46,9 @@ void add_compare_command(CLI::App& app) {
         p.leaf = leaf;
         p.coarse = std::string(method) == "homogeneous" ? leaf : o->coarse;
         p.extent_snap = o->coarse;  // both methods cover the same region
+        std::printf("%-11s %5.2f → %4.2f m: discretize, openings, occlusion study ...\n", method,
+                    p.coarse, leaf);
+        std::fflush(stdout);
         const auto t0 = std::chrono::steady_clock::now();
         const auto tree = discretize(*cloud.pre.cloud, cloud.pre.ceiling_height, p);
         // Table 1 needs every class: doors and windows, then the occlusion study.
