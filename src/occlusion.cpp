@@ -1,7 +1,9 @@
 #include "semioctree/occlusion.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <thread>
 
 namespace semioctree {
 
@@ -45,65 +47,42 @@ bool candidate(Label l, bool only_occluded) {
   return l == Label::kEmpty || l == Label::kOccluded || l == Label::kOut;
 }
 
-class Study {
- public:
-  Study(SemiOcTree& tree, const std::vector<ScannerView>& views, const OcclusionParams& p)
-      : tree_(tree), views_(views), p_(p) {}
+struct Candidate {
+  octomap::OcTreeKey key;
+  unsigned level;
+};
 
-  Visibility see(const Point3& q) {
+// What the samples of one octant say: uniform visibility, or split.
+struct Verdict {
+  bool uniform = true;
+  Visibility visibility = Visibility::kHidden;
+  std::size_t segments = 0;
+};
+
+Verdict judge(const SemiOcTree& tree, const std::vector<ScannerView>& views,
+              const OcclusionParams& p, const Candidate& c) {
+  Verdict v;
+  auto see = [&](const Point3& q) {
     Visibility best = Visibility::kHidden;
-    for (const ScannerView& v : views_) {
-      ++report.segments;
-      best = std::max(best, segment_visibility(tree_, v, q));
+    for (const ScannerView& view : views) {
+      ++v.segments;
+      best = std::max(best, segment_visibility(tree, view, q));
       if (best == Visibility::kDirect) break;
     }
     return best;
-  }
-
-  // Classifies the octant (key, level); splits it where its samples disagree.
-  void classify(const octomap::OcTreeKey& key, unsigned level) {
-    ++report.octants_tested;
-    const Octant o = tree_.make_octant(key, level, nullptr);
-    const Visibility centre = see(o.center);
-    bool uniform = true;
-    if (level < tree_.coarse_level()) {
-      const double h = 0.5 * o.size * (1.0 - 2.0 * p_.corner_inset);
-      for (int c = 0; c < 8 && uniform; ++c) {
-        const Point3 q(o.center.x + ((c & 1) ? h : -h), o.center.y + ((c & 2) ? h : -h),
-                       o.center.z + ((c & 4) ? h : -h));
-        uniform = see(q) == centre;
-      }
-    }
-    if (uniform) {
-      tree_.set_label(o.key, level, label_for(centre));
-      count(label_for(centre));
-      return;
-    }
-    // Partly visible: split and classify each child.
-    tree_.split(o.key, level);
-    ++report.octants_split;
-    const unsigned half = 1u << (tree_.coarse_level() - level - 1);
-    for (unsigned i = 0; i < 8; ++i) {
-      octomap::OcTreeKey ck = o.key;
-      for (int a = 0; a < 3; ++a)
-        if (i & (1u << a)) ck.k[a] = static_cast<octomap::key_type>(ck.k[a] + half);
-      classify(ck, level + 1);
+  };
+  const Octant o = tree.make_octant(c.key, c.level, nullptr);
+  v.visibility = see(o.center);
+  if (c.level < tree.coarse_level()) {
+    const double h = 0.5 * o.size * (1.0 - 2.0 * p.corner_inset);
+    for (int k = 0; k < 8 && v.uniform; ++k) {
+      const Point3 q(o.center.x + ((k & 1) ? h : -h), o.center.y + ((k & 2) ? h : -h),
+                     o.center.z + ((k & 4) ? h : -h));
+      v.uniform = see(q) == v.visibility;
     }
   }
-
-  void count(Label l) {
-    if (l == Label::kEmpty) ++report.empty;
-    if (l == Label::kOccluded) ++report.occluded;
-    if (l == Label::kOut) ++report.out;
-  }
-
-  OcclusionReport report;
-
- private:
-  SemiOcTree& tree_;
-  const std::vector<ScannerView>& views_;
-  const OcclusionParams& p_;
-};
+  return v;
+}
 
 }  // namespace
 
@@ -116,14 +95,58 @@ Visibility point_visibility(const SemiOcTree& tree, const std::vector<ScannerVie
 
 OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>& views,
                                 const OcclusionParams& params) {
-  // Collect the candidates first: classifying splits octants and edits the tree.
-  std::vector<std::pair<octomap::OcTreeKey, unsigned>> todo;
+  // Level by level: judge every candidate from its sample points in parallel
+  // (ray casting only reads the tree: the labels set here never block a ray),
+  // then apply the verdicts; octants whose samples disagree are split and
+  // their children judged in the next round. The result does not depend on
+  // the number of threads.
+  std::vector<Candidate> todo;
   tree.for_each_octant([&](const Octant& o) {
-    if (candidate(o.label(), params.only_occluded)) todo.emplace_back(o.key, o.level);
+    if (candidate(o.label(), params.only_occluded)) todo.push_back({o.key, o.level});
   });
-  Study study(tree, views, params);
-  for (const auto& [key, level] : todo) study.classify(key, level);
-  return study.report;
+  OcclusionReport report;
+  const unsigned threads = std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
+  std::vector<Verdict> verdicts;
+  while (!todo.empty()) {
+    verdicts.assign(todo.size(), Verdict{});
+    std::atomic<std::size_t> next{0};
+    auto work = [&] {
+      for (std::size_t i; (i = next.fetch_add(64)) < todo.size();)
+        for (std::size_t j = i; j < std::min(i + 64, todo.size()); ++j)
+          verdicts[j] = judge(tree, views, params, todo[j]);
+    };
+    std::vector<std::thread> pool;
+    for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
+    work();
+    for (auto& t : pool) t.join();
+
+    std::vector<Candidate> children;
+    for (std::size_t i = 0; i < todo.size(); ++i) {
+      const Candidate& c = todo[i];
+      const Verdict& v = verdicts[i];
+      ++report.octants_tested;
+      report.segments += v.segments;
+      if (v.uniform) {
+        const Label l = label_for(v.visibility);
+        tree.set_label(c.key, c.level, l);
+        report.empty += l == Label::kEmpty;
+        report.occluded += l == Label::kOccluded;
+        report.out += l == Label::kOut;
+        continue;
+      }
+      tree.split(c.key, c.level);  // partly visible
+      ++report.octants_split;
+      const unsigned half = 1u << (tree.coarse_level() - c.level - 1);
+      for (unsigned k = 0; k < 8; ++k) {
+        octomap::OcTreeKey ck = c.key;
+        for (int a = 0; a < 3; ++a)
+          if (k & (1u << a)) ck.k[a] = static_cast<octomap::key_type>(ck.k[a] + half);
+        children.push_back({ck, c.level + 1});
+      }
+    }
+    todo.swap(children);
+  }
+  return report;
 }
 
 }  // namespace semioctree
