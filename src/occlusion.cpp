@@ -105,7 +105,9 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
     if (candidate(o.label(), params.only_occluded)) todo.push_back({o.key, o.level});
   });
   OcclusionReport report;
-  const unsigned threads = std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
+  const unsigned threads = params.threads > 0
+                               ? params.threads
+                               : std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
   std::vector<Verdict> verdicts;
   while (!todo.empty()) {
     verdicts.assign(todo.size(), Verdict{});

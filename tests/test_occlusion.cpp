@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <tuple>
 
 #include "semioctree/discretize.h"
 #include "semioctree/occlusion.h"
@@ -97,6 +98,22 @@ TEST(Occlusion, ShadowBehindAnObstacleMatchesGeometryWithinOneLeaf) {
   EXPECT_GT(shadow, 300);
   // Space far from any boundary stays coarse: the octant at the scanner is big.
   EXPECT_LE(tree->find_octant(Point3(0.5, 0.5, 0.5))->level, 1u);
+}
+
+TEST(Occlusion, SameResultForAnyThreadCount) {
+  std::vector<std::tuple<unsigned, unsigned, unsigned, unsigned, Label>> maps[3];
+  for (unsigned threads : {1u, 2u, 3u}) {
+    const auto tree = discretize(room_with_pillar(), 2.4, {0.05, 0.8});
+    OcclusionParams p;
+    p.threads = threads;
+    study_occlusion(*tree, {ScannerView{Point3(1.0, 2.0, 1.2)}}, p);
+    tree->for_each_octant([&](const Octant& o) {
+      maps[threads - 1].emplace_back(o.key.k[0], o.key.k[1], o.key.k[2], o.level, o.label());
+    });
+  }
+  EXPECT_GT(maps[0].size(), 1000u);
+  EXPECT_EQ(maps[0], maps[1]);
+  EXPECT_EQ(maps[0], maps[2]);
 }
 
 TEST(Occlusion, SecondScannerUnoccludesWhatItSees) {

@@ -33,6 +33,8 @@ struct OcclusionParams {
   // Sample points are the centre and the 8 corners pulled in by this fraction
   // of the octant size (corners exactly on faces belong to the neighbour).
   double corner_inset = 0.02;
+  // Worker threads (0: one per core); the result is the same for any count.
+  unsigned threads = 0;
 };
 
 struct OcclusionReport {
