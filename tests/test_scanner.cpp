@@ -22,27 +22,18 @@
 #include "semioctree/sim/scanner.h"
 #include "semioctree/sim/scene.h"
 #include "semioctree/sim/solids.h"
+#include "support/cli_run.h"
 
 namespace {
 
 using namespace semioctree::sim;
 namespace fs = std::filesystem;
+using semioctree::testing::CliRun;
+using semioctree::testing::run_cli;
+using semioctree::testing::scratch;
+using semioctree::testing::slurp;
 
 const std::string kScenes = SEMIOCTREE_SOURCE_DIR "/sim/scenes";
-
-// A directory of this test process's own (ctest runs test cases as parallel processes),
-// removed when the process ends.
-const fs::path& scratch() {
-  static const struct Dir {
-    fs::path path = fs::temp_directory_path() / ("semioctree_test_" + std::to_string(::getpid()));
-    Dir() { fs::create_directories(path); }
-    ~Dir() {
-      std::error_code ec;
-      fs::remove_all(path, ec);
-    }
-  } dir;
-  return dir.path;
-}
 
 struct Loaded {
   Scene scene;
@@ -54,13 +45,6 @@ struct Loaded {
 
 Eigen::Vector3d world_point(const Scan& s, std::size_t i) {
   return s.sensor_to_world() * s.points[i].cast<double>();
-}
-
-std::string slurp(const std::string& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
 }
 
 TEST(ScanGrid, SizesFollowTheSteps) {
@@ -409,20 +393,6 @@ TEST(Acceptance, NoPointInsideASolidOrBehindAWallOnTheLab) {
 }
 
 // --- the command line ---------------------------------------------------------------------
-
-struct CliRun {
-  int exit_code;
-  std::string out, err;
-};
-
-CliRun run_cli(const std::string& args) {
-  const fs::path dir = scratch();
-  const std::string out = (dir / "semioctree_test_scanner.out").string();
-  const std::string err = (dir / "semioctree_test_scanner.err").string();
-  const int status =
-      std::system((std::string(SEMIOCTREE_CLI) + " " + args + " >" + out + " 2>" + err).c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
-}
 
 TEST(ScanCommand, WritesReproducibleFiles) {
   const fs::path dir = scratch() / "semioctree_test_scan_cli";

@@ -17,28 +17,18 @@
 
 #include "semioctree/sim/geometry.h"
 #include "semioctree/sim/scene.h"
+#include "support/cli_run.h"
 
 namespace {
 
 using nlohmann::json;
 using namespace semioctree::sim;
 namespace fs = std::filesystem;
+using semioctree::testing::CliRun;
+using semioctree::testing::run_cli;
+using semioctree::testing::scratch;
 
 const std::string kScenes = SEMIOCTREE_SOURCE_DIR "/sim/scenes";
-
-// A directory of this test process's own (ctest runs test cases as parallel processes),
-// removed when the process ends.
-const fs::path& scratch() {
-  static const struct Dir {
-    fs::path path = fs::temp_directory_path() / ("semioctree_test_" + std::to_string(::getpid()));
-    Dir() { fs::create_directories(path); }
-    ~Dir() {
-      std::error_code ec;
-      fs::remove_all(path, ec);
-    }
-  } dir;
-  return dir.path;
-}
 
 // A small valid scene that each rule test breaks in one place.
 json base_scene() {
@@ -588,26 +578,6 @@ TEST(OctomapScenes, ABadFileIsRejected) {
 }
 
 // --- the command line ------------------------------------------------------------------
-
-struct CliRun {
-  int exit_code;
-  std::string out, err;
-};
-
-CliRun run_cli(const std::string& args) {
-  const fs::path dir = scratch();
-  const std::string out = (dir / "semioctree_test_scene.out").string();
-  const std::string err = (dir / "semioctree_test_scene.err").string();
-  const int status =
-      std::system((std::string(SEMIOCTREE_CLI) + " " + args + " >" + out + " 2>" + err).c_str());
-  auto slurp = [](const std::string& f) {
-    std::ifstream in(f);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  };
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
-}
 
 TEST(SceneInfoCommand, SummarisesTheLab) {
   const CliRun r = run_cli("scene-info " + kScenes + "/lab.scene.json");

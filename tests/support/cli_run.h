@@ -1,0 +1,52 @@
+// Running the built `semioctree` tool from a test, and a scratch directory of
+// the test process's own (ctest runs test cases as parallel processes).
+#pragma once
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace semioctree::testing {
+
+// Created on first use, removed when the process ends.
+inline const std::filesystem::path& scratch() {
+  static const struct Dir {
+    std::filesystem::path path =
+        std::filesystem::temp_directory_path() / ("semioctree_test_" + std::to_string(::getpid()));
+    Dir() { std::filesystem::create_directories(path); }
+    ~Dir() {
+      std::error_code ec;
+      std::filesystem::remove_all(path, ec);
+    }
+  } dir;
+  return dir.path;
+}
+
+inline std::string slurp(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+struct CliRun {
+  int exit_code;
+  std::string out, err;
+  std::string all() const { return out + err; }
+};
+
+// Runs `semioctree ARGS` (the path the build passes as SEMIOCTREE_CLI).
+inline CliRun run_cli(const std::string& args) {
+  const std::string out = (scratch() / "cli.out").string();
+  const std::string err = (scratch() / "cli.err").string();
+  const int status =
+      std::system((std::string(SEMIOCTREE_CLI) + " " + args + " >" + out + " 2>" + err).c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+}  // namespace semioctree::testing
