@@ -4,8 +4,42 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 namespace semioctree {
+
+namespace {
+
+// Open-addressing set of leaf keys, sized for `expected` insertions.
+class LeafKeySet {
+ public:
+  explicit LeafKeySet(std::size_t expected) {
+    std::size_t capacity = 1024;
+    while (capacity < 2 * expected) capacity *= 2;
+    slots_.assign(capacity, kEmpty);
+    shift_ = 64 - unsigned(__builtin_ctzll(capacity));
+  }
+  // False when the key was already there.
+  bool insert(const octomap::OcTreeKey& k) {
+    const std::uint64_t v =
+        (std::uint64_t(k.k[0]) << 32) | (std::uint64_t(k.k[1]) << 16) | std::uint64_t(k.k[2]);
+    for (std::size_t i = std::size_t((v * 0x9E3779B97F4A7C15ull) >> shift_);;
+         i = (i + 1) & (slots_.size() - 1)) {
+      if (slots_[i] == v) return false;
+      if (slots_[i] == kEmpty) {
+        slots_[i] = v;
+        return true;
+      }
+    }
+  }
+
+ private:
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
+  std::vector<std::uint64_t> slots_;
+  unsigned shift_ = 64;
+};
+
+}  // namespace
 
 std::unique_ptr<SemiOcTree> discretize(const Cloud& cloud, double ceiling_height,
                                        const DiscretizeParams& params, DiscretizeReport* report) {
@@ -51,14 +85,16 @@ std::unique_ptr<SemiOcTree> discretize(const Cloud& cloud, double ceiling_height
   for (int i = cmin.x; i <= cmax.x; ++i)
     for (int j = cmin.y; j <= cmax.y; ++j)
       for (int l = cmin.z; l <= cmax.z; ++l) tree->create_coarse({i, j, l}, Label::kEmpty);
-  // Occupancy: the leaf of every point is occupied; its ancestors are split on the way.
+  // Occupancy: the leaf of every point is occupied; its ancestors are split on
+  // the way. Points sharing a leaf are skipped through a hash set of leaf keys
+  // (a tree descent per point would cost more than the labelling itself).
   const unsigned leaf = tree->coarse_level();
+  LeafKeySet seen(cloud.size());
   for (const auto& p : cloud) {
     if (p.z < 0 || p.z >= ceiling_height) continue;
     octomap::OcTreeKey key;
     if (!tree->key_of({p.x, p.y, p.z}, key)) continue;
-    const auto o = tree->find_octant(key);
-    if (o && o->level == leaf && o->label() == Label::kOccupied) continue;
+    if (!seen.insert(key)) continue;
     tree->set_label(key, leaf, Label::kOccupied);
     ++rep.occupied_leaves;
   }

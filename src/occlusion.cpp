@@ -2,22 +2,47 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <ctime>
 #include <thread>
 
 namespace semioctree {
 
 namespace {
 
-Visibility segment_visibility(const SemiOcTree& tree, const ScannerView& v, const Point3& p) {
-  const double dx = p.x - v.position.x, dy = p.y - v.position.y, dz = p.z - v.position.z;
-  const double range = std::sqrt(dx * dx + dy * dy + dz * dz);
-  if (range < v.min_range || range > v.max_range) return Visibility::kHidden;
-  const double elevation = std::asin(std::clamp(dz / range, -1.0, 1.0)) * 180.0 / M_PI;
-  if (elevation < v.elevation_min_deg || elevation > v.elevation_max_deg)
-    return Visibility::kHidden;
+// Per-view constants: the elevation limits as bounds on dz / range, so that a
+// segment needs no trigonometry.
+struct ViewLimits {
+  const ScannerView* view;
+  double min_range2, max_range2, sin_min, sin_max;
+};
+
+ViewLimits limits_of(const ScannerView& v) {
+  auto sine = [](double deg) { return std::sin(std::clamp(deg, -90.0, 90.0) * M_PI / 180.0); };
+  return {&v, v.min_range * v.min_range, v.max_range * v.max_range, sine(v.elevation_min_deg),
+          sine(v.elevation_max_deg)};
+}
+
+// Occupied octants entered at the very end of a segment only touch its end
+// point (a sample on a lattice corner shared with them): they hide nothing.
+constexpr double kEndTolerance = 1e-9;
+
+// kMarked: the tree's marks are fresh (study_occlusion), so refined space
+// without blockers can be crossed in one step.
+template <bool kMarked>
+Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, const Point3& p) {
+  const Point3& o = lim.view->position;
+  const double dx = p.x - o.x, dy = p.y - o.y, dz = p.z - o.z;
+  const double range2 = dx * dx + dy * dy + dz * dz;
+  if (range2 < lim.min_range2 || range2 > lim.max_range2) return Visibility::kHidden;
+  const double range = std::sqrt(range2);
+  if (dz < lim.sin_min * range || dz > lim.sin_max * range) return Visibility::kHidden;
   bool through_opening = false, blocked = false;
-  tree.traverse(v.position, p, [&](const RayStep& s) {
+  auto visit = [&](const RayStep& s) {
+    if (s.t_enter >= 1.0 - kEndTolerance) return false;
+    if (s.summary) return true;  // no occupied, door or window octant inside
     const Label l = s.label();
     // The scanner's own octant never hides anything (noise can put a point in it).
     if (l == Label::kOccupied && s.t_enter > 0.0) {
@@ -26,9 +51,29 @@ Visibility segment_visibility(const SemiOcTree& tree, const ScannerView& v, cons
     }
     through_opening |= (l == Label::kDoor || l == Label::kWindow);
     return true;
-  });
+  };
+  if (kMarked)
+    tree.traverse_marked(o, p, visit);
+  else
+    tree.traverse(o, p, visit);
   if (blocked) return Visibility::kHidden;
   return through_opening ? Visibility::kThroughOpening : Visibility::kDirect;
+}
+
+template <bool kMarked>
+Visibility best_visibility(const SemiOcTree& tree, const std::vector<ViewLimits>& views,
+                           const Point3& p, std::size_t& segments) {
+  Visibility best = Visibility::kHidden;
+  for (const ViewLimits& v : views) {
+    ++segments;
+    best = std::max(best, segment_visibility<kMarked>(tree, v, p));
+    if (best == Visibility::kDirect) break;
+  }
+  return best;
+}
+
+std::uint32_t label_bit(Label l) {
+  return 1u << unsigned(l);
 }
 
 Label label_for(Visibility v) {
@@ -50,100 +95,193 @@ bool candidate(Label l, bool only_occluded) {
 struct Candidate {
   octomap::OcTreeKey key;
   unsigned level;
+  SemiOcTreeNode* node;  // a leaf octant of the tree
 };
 
-// What the samples of one octant say: uniform visibility, or split.
-struct Verdict {
-  bool uniform = true;
-  Visibility visibility = Visibility::kHidden;
-  std::size_t segments = 0;
-};
+// Sample points live on the lattice of half leaves: coordinate u (per axis)
+// is the point (u / 2 − 32768)·r. Corners of octants are even, leaf centres
+// odd, and the centre of an octant is a corner of its children, so the
+// samples of neighbouring octants and of successive levels coincide and each
+// is cast once.
+using LatticePoint = std::uint64_t;
 
-Verdict judge(const SemiOcTree& tree, const std::vector<ScannerView>& views,
-              const OcclusionParams& p, const Candidate& c) {
-  Verdict v;
-  auto see = [&](const Point3& q) {
-    Visibility best = Visibility::kHidden;
-    for (const ScannerView& view : views) {
-      ++v.segments;
-      best = std::max(best, segment_visibility(tree, view, q));
-      if (best == Visibility::kDirect) break;
+LatticePoint pack(std::uint32_t u, std::uint32_t v, std::uint32_t w) {
+  return (std::uint64_t(u) << 42) | (std::uint64_t(v) << 21) | std::uint64_t(w);
+}
+
+Point3 unpack(LatticePoint p, double leaf) {
+  auto coord = [leaf](std::uint64_t u) { return (0.5 * double(u) - 32768.0) * leaf; };
+  return {coord(p >> 42), coord((p >> 21) & 0x1fffff), coord(p & 0x1fffff)};
+}
+
+// The centre (index 0) and the 8 corners of an octant; a leaf has only its centre.
+int samples_of(const Candidate& c, unsigned coarse_level, LatticePoint out[9]) {
+  const std::uint32_t size = 1u << (coarse_level - c.level);  // in leaves
+  const std::uint32_t x = 2u * c.key.k[0], y = 2u * c.key.k[1], z = 2u * c.key.k[2];
+  out[0] = pack(x + size, y + size, z + size);
+  if (c.level == coarse_level) return 1;
+  for (int k = 0; k < 8; ++k)
+    out[k + 1] = pack(x + ((k & 1) ? 2 * size : 0), y + ((k & 2) ? 2 * size : 0),
+                      z + ((k & 4) ? 2 * size : 0));
+  return 9;
+}
+
+// Open-addressing map lattice point → sample id (index into the study's
+// visibility array), filled serially, each point once.
+class SampleIndex {
+ public:
+  // The id of `p`; `next_id` when new (then inserted with that id).
+  std::uint32_t find_or_add(LatticePoint p, std::uint32_t next_id) {
+    if (4 * (size_ + 1) > 3 * keys_.size()) grow();
+    std::size_t i = slot_of(p);
+    while (keys_[i] != kEmptyKey) {
+      if (keys_[i] == p) return ids_[i];
+      i = (i + 1) & (keys_.size() - 1);
     }
-    return best;
-  };
-  const Octant o = tree.make_octant(c.key, c.level, nullptr);
-  v.visibility = see(o.center);
-  if (c.level < tree.coarse_level()) {
-    const double h = 0.5 * o.size * (1.0 - 2.0 * p.corner_inset);
-    for (int k = 0; k < 8 && v.uniform; ++k) {
-      const Point3 q(o.center.x + ((k & 1) ? h : -h), o.center.y + ((k & 2) ? h : -h),
-                     o.center.z + ((k & 4) ? h : -h));
-      v.uniform = see(q) == v.visibility;
-    }
+    keys_[i] = p;
+    ids_[i] = next_id;
+    ++size_;
+    return next_id;
   }
-  return v;
+
+  void prefetch(LatticePoint p) const {
+    if (!keys_.empty()) __builtin_prefetch(&keys_[slot_of(p)]);
+  }
+
+ private:
+  static constexpr LatticePoint kEmptyKey = ~LatticePoint(0);
+  std::size_t slot_of(LatticePoint p) const {
+    return std::size_t((p * 0x9E3779B97F4A7C15ull) >> shift_);  // Fibonacci hashing
+  }
+  void grow() {
+    std::vector<LatticePoint> keys = std::move(keys_);
+    std::vector<std::uint32_t> ids = std::move(ids_);
+    const std::size_t capacity = std::max<std::size_t>(1024, 2 * keys.size());
+    keys_.assign(capacity, kEmptyKey);
+    ids_.assign(capacity, 0);
+    shift_ = 64 - unsigned(__builtin_ctzll(capacity));
+    size_ = 0;
+    for (std::size_t i = 0; i < keys.size(); ++i)
+      if (keys[i] != kEmptyKey) find_or_add(keys[i], ids[i]);
+  }
+  std::vector<LatticePoint> keys_;
+  std::vector<std::uint32_t> ids_;
+  unsigned shift_ = 64;
+  std::size_t size_ = 0;
+};
+
+// Runs f(i) for i in [0, n) on `threads` threads, in chunks.
+template <typename F>
+void parallel_for(std::size_t n, unsigned threads, F&& f) {
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    for (std::size_t i; (i = next.fetch_add(64)) < n;)
+      for (std::size_t j = i; j < std::min(i + 64, n); ++j) f(j);
+  };
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < threads && n > 64 * t; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
 }
 
 }  // namespace
 
 Visibility point_visibility(const SemiOcTree& tree, const std::vector<ScannerView>& views,
                             const Point3& p) {
-  Visibility best = Visibility::kHidden;
-  for (const ScannerView& v : views) best = std::max(best, segment_visibility(tree, v, p));
-  return best;
+  std::vector<ViewLimits> limits;
+  for (const ScannerView& v : views) limits.push_back(limits_of(v));
+  std::size_t segments = 0;
+  return best_visibility<false>(tree, limits, p, segments);
 }
 
 OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>& views,
                                 const OcclusionParams& params) {
-  // Level by level: judge every candidate from its sample points in parallel
-  // (ray casting only reads the tree: the labels set here never block a ray),
-  // then apply the verdicts; octants whose samples disagree are split and
-  // their children judged in the next round. The result does not depend on
+  // Level by level: the sample points of every candidate octant (centre and
+  // corners) are cast in parallel — once each, through a lattice cache — then
+  // the verdicts are applied; octants whose samples disagree are split and
+  // their children judged in the next round. Ray casting only reads the tree
+  // (the labels set here never block a ray), so the result does not depend on
   // the number of threads.
+  std::vector<ViewLimits> limits;
+  for (const ScannerView& v : views) limits.push_back(limits_of(v));
+  // Rays care only about these labels: refined space without them is one step.
+  tree.mark_subtrees(label_bit(Label::kOccupied) | label_bit(Label::kDoor) |
+                     label_bit(Label::kWindow));
   std::vector<Candidate> todo;
   tree.for_each_octant([&](const Octant& o) {
-    if (candidate(o.label(), params.only_occluded)) todo.push_back({o.key, o.level});
+    if (candidate(o.label(), params.only_occluded))
+      todo.push_back({o.key, o.level, const_cast<SemiOcTreeNode*>(o.node)});
   });
   OcclusionReport report;
   const unsigned threads = params.threads > 0
                                ? params.threads
                                : std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
-  std::vector<Verdict> verdicts;
+  const unsigned leaf = tree.coarse_level();
+  const double leaf_size = tree.leaf_size();
+  SampleIndex index;
+  std::vector<LatticePoint> points;      // by sample id
+  std::vector<std::uint8_t> visibility;  // by sample id
+  std::vector<std::uint32_t> samples;    // ids of each candidate's samples, 9 per candidate
+  std::vector<std::size_t> segments;
   while (!todo.empty()) {
-    verdicts.assign(todo.size(), Verdict{});
-    std::atomic<std::size_t> next{0};
-    auto work = [&] {
-      for (std::size_t i; (i = next.fetch_add(64)) < todo.size();)
-        for (std::size_t j = i; j < std::min(i + 64, todo.size()); ++j)
-          verdicts[j] = judge(tree, views, params, todo[j]);
-    };
-    std::vector<std::thread> pool;
-    for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
-    work();
-    for (auto& t : pool) t.join();
+    const std::size_t first_new = points.size();
+    samples.resize(9 * todo.size());
+    for (std::size_t c = 0; c < todo.size(); ++c) {
+      LatticePoint s[9];
+      const int n = samples_of(todo[c], leaf, s);
+      if (c + 8 < todo.size() && todo[c + 8].level < leaf) {  // hide the probes' cache misses
+        LatticePoint ahead[9];
+        for (int i = 0, m = samples_of(todo[c + 8], leaf, ahead); i < m; ++i)
+          index.prefetch(ahead[i]);
+      }
+      if (n == 1) {  // a leaf's centre (odd lattice point) is no other octant's sample
+        samples[9 * c] = static_cast<std::uint32_t>(points.size());
+        points.push_back(s[0]);
+        continue;
+      }
+      for (int i = 0; i < n; ++i) {
+        const auto next = static_cast<std::uint32_t>(points.size());
+        const std::uint32_t id = index.find_or_add(s[i], next);
+        if (id == next) points.push_back(s[i]);
+        samples[9 * c + i] = id;
+      }
+    }
+    visibility.resize(points.size());
+    segments.assign(points.size() - first_new, 0);
+    parallel_for(points.size() - first_new, threads, [&](std::size_t i) {
+      const std::size_t id = first_new + i;
+      visibility[id] = std::uint8_t(
+          best_visibility<true>(tree, limits, unpack(points[id], leaf_size), segments[i]));
+    });
+    for (std::size_t n : segments) report.segments += n;
 
     std::vector<Candidate> children;
-    for (std::size_t i = 0; i < todo.size(); ++i) {
-      const Candidate& c = todo[i];
-      const Verdict& v = verdicts[i];
+    for (std::size_t c = 0; c < todo.size(); ++c) {
+      const Candidate& o = todo[c];
+      const std::uint32_t* id = &samples[9 * c];
+      const std::uint8_t first = visibility[id[0]];
+      bool uniform = true;
+      if (o.level < leaf)
+        for (int i = 1; i < 9 && uniform; ++i) uniform = visibility[id[i]] == first;
       ++report.octants_tested;
-      report.segments += v.segments;
-      if (v.uniform) {
-        const Label l = label_for(v.visibility);
-        tree.set_label(c.key, c.level, l);
+      if (uniform) {
+        // A leaf of the tree: relabel in place.
+        const Label l = label_for(Visibility(first));
+        o.node->set_label(l);
+        o.node->setLogOdds(tree.log_odds_for(l));
         report.empty += l == Label::kEmpty;
         report.occluded += l == Label::kOccluded;
         report.out += l == Label::kOut;
         continue;
       }
-      tree.split(c.key, c.level);  // partly visible
+      tree.expandNode(o.node);  // partly visible: 8 children with its label
       ++report.octants_split;
-      const unsigned half = 1u << (tree.coarse_level() - c.level - 1);
-      for (unsigned k = 0; k < 8; ++k) {
-        octomap::OcTreeKey ck = c.key;
+      const unsigned half = 1u << (leaf - o.level - 1);
+      for (unsigned k = 0; k < 8; ++k) {  // child index: bit 0 x, bit 1 y, bit 2 z (OctoMap's)
+        octomap::OcTreeKey ck = o.key;
         for (int a = 0; a < 3; ++a)
           if (k & (1u << a)) ck.k[a] = static_cast<octomap::key_type>(ck.k[a] + half);
-        children.push_back({ck, c.level + 1});
+        children.push_back({ck, o.level + 1, tree.getNodeChild(o.node, k)});
       }
     }
     todo.swap(children);

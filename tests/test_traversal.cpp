@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <functional>
 #include <random>
 #include <set>
 
@@ -288,6 +289,77 @@ TEST(Traversal, AgreesWithOctoMapComputeRayKeys) {
     same += ours == theirs;
   }
   EXPECT_GE(same, n * 999 / 1000) << "of " << n << " segments";
+}
+
+TEST(Traversal, MarkedTraversalKeepsEveryMarkedOctantAndSkipsTheRest) {
+  // traverse_marked must report exactly the octants with a marked label that
+  // the full walk reports (same keys, levels, t), in order, and cover the rest
+  // of the segment with summary steps of split octants that hold none.
+  for (unsigned seed : {3u, 4u}) {
+    auto tree = random_tree(0.05, 4, seed);
+    const std::uint32_t mask = (1u << unsigned(Label::kOccupied)) | (1u << unsigned(Label::kDoor));
+    tree->mark_subtrees(mask);
+    std::mt19937 rng(seed);
+    std::size_t full_steps = 0, marked_steps = 0, summaries = 0;
+    for (int i = 0; i < segment_count() / 10; ++i) {
+      const auto [a, b] = random_segment(rng, tree->leaf_size(), 2.5 * tree->coarse_size(), 3.0);
+      std::vector<RefStep> want, got;
+      double t_last = -1;
+      tree->traverse(a, b, [&](const RayStep& s) {
+        ++full_steps;
+        if ((mask >> unsigned(s.label())) & 1u) want.push_back({s.key, s.level, true, s.t_enter});
+        return true;
+      });
+      tree->traverse_marked(a, b, [&](const RayStep& s) {
+        ++marked_steps;
+        EXPECT_GE(s.t_enter, t_last);  // still in order along the segment
+        t_last = s.t_enter;
+        if (s.summary) {
+          ++summaries;
+          // A summary step is a split octant with nothing marked below.
+          EXPECT_TRUE(s.node != nullptr && tree->nodeHasChildren(s.node));
+          EXPECT_FALSE(s.node->has_flag(SemiOcTreeNode::kMarked));
+          return true;
+        }
+        if ((mask >> unsigned(s.label())) & 1u) got.push_back({s.key, s.level, true, s.t_enter});
+        return true;
+      });
+      ASSERT_EQ(got.size(), want.size()) << "segment " << i;
+      for (std::size_t j = 0; j < got.size(); ++j) {
+        ASSERT_EQ(got[j].key, want[j].key) << "segment " << i;
+        ASSERT_EQ(got[j].level, want[j].level) << "segment " << i;
+        ASSERT_EQ(got[j].t_enter, want[j].t_enter) << "segment " << i;
+      }
+    }
+    EXPECT_GT(summaries, 0u);
+    EXPECT_LT(marked_steps, full_steps);  // something was skipped
+  }
+}
+
+TEST(Traversal, MarksStayValidWhenUnmarkedLeavesAreSplit) {
+  auto tree = random_tree(0.05, 4, 9);
+  tree->mark_subtrees(1u << unsigned(Label::kOccupied));
+  // Split every unmarked non-occupied leaf once (what the occlusion study does).
+  std::vector<Octant> leaves;
+  tree->for_each_octant([&](const Octant& o) {
+    if (o.level < tree->coarse_level() && o.label() != Label::kOccupied) leaves.push_back(o);
+  });
+  for (const Octant& o : leaves) tree->expandNode(const_cast<SemiOcTreeNode*>(o.node));
+  // No new node carries the mark, and every marked node still holds an occupied leaf.
+  std::size_t marked = 0;
+  std::function<bool(const SemiOcTreeNode*)> holds = [&](const SemiOcTreeNode* n) {
+    if (!tree->nodeHasChildren(n)) return n->label() == Label::kOccupied;
+    bool any = false;
+    for (unsigned i = 0; i < 8; ++i)
+      if (tree->nodeChildExists(n, i)) any |= holds(tree->getNodeChild(n, i));
+    EXPECT_EQ(any, n->has_flag(SemiOcTreeNode::kMarked));
+    marked += any;
+    return any;
+  };
+  tree->for_each_coarse([&](const CoarseIndex&, SemiOcTreeNode* n) {
+    if (tree->nodeHasChildren(n)) holds(n);
+  });
+  EXPECT_GT(marked, 0u);
 }
 
 }  // namespace

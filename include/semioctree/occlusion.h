@@ -2,11 +2,11 @@
 // classified from the scanner positions so far by ray casting through the
 // SemiOcTree (octant-sized steps): the segment from a scanner to it crosses an
 // occupied octant → occluded; it passes through a door or window and nothing
-// occupied → out; otherwise → empty. An octant whose sample points disagree is
-// partly visible and is split, down to the leaf, so the boundary between seen
-// and unseen space is at leaf resolution while wholly visible or wholly hidden
-// space stays coarse. A point is seen if any scanner sees it; the scanner's
-// range and elevation limits apply.
+// occupied → out; otherwise → empty. An octant whose sample points (its centre
+// and corners) disagree is partly visible and is split, down to the leaf, so
+// the boundary between seen and unseen space is at leaf resolution while
+// wholly visible or wholly hidden space stays coarse. A point is seen if any
+// scanner sees it; the scanner's range and elevation limits apply.
 #pragma once
 
 #include <cstddef>
@@ -30,9 +30,6 @@ struct OcclusionParams {
   // Only re-test octants labelled occluded (a new scanner position), instead
   // of every empty/occluded/out octant.
   bool only_occluded = false;
-  // Sample points are the centre and the 8 corners pulled in by this fraction
-  // of the octant size (corners exactly on faces belong to the neighbour).
-  double corner_inset = 0.02;
   // Worker threads (0: one per core); the result is the same for any count.
   unsigned threads = 0;
 };

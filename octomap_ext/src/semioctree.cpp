@@ -341,6 +341,24 @@ SemiOcTreeNode* SemiOcTree::set_label(const octomap::OcTreeKey& key, unsigned le
   return node;
 }
 
+bool SemiOcTree::mark_recurs(SemiOcTreeNode* node, std::uint32_t labels) {
+  if (!nodeHasChildren(node)) return (labels >> unsigned(node->label())) & 1u;
+  bool any = false;
+  for (unsigned i = 0; i < 8; ++i)
+    if (nodeChildExists(node, i)) any |= mark_recurs(getNodeChild(node, i), labels);
+  node->set_flag(SemiOcTreeNode::kMarked, any);
+  return any;
+}
+
+void SemiOcTree::mark_subtrees(std::uint32_t labels) {
+  for_each_coarse([&](const CoarseIndex&, SemiOcTreeNode* node) {
+    if (nodeHasChildren(node))
+      mark_recurs(node, labels);
+    else
+      node->set_flag(SemiOcTreeNode::kMarked, false);
+  });
+}
+
 OctantStatistics SemiOcTree::statistics() const {
   OctantStatistics st;
   st.coarse_level = coarse_level_;

@@ -78,6 +78,9 @@ struct RayStep {
   unsigned level = 0;                    // 0 = coarse voxel ... coarse_level() = leaf
   const SemiOcTreeNode* node = nullptr;  // null: no coarse voxel there (unknown space)
   double t_enter = 0;                    // segment parameter in [0, 1] where the octant is entered
+  // A split octant crossed in one step (traverse_marked: nothing marked below);
+  // its node's label says nothing about its children then.
+  bool summary = false;
   Label label() const { return node ? node->label() : Label::kUnknown; }
 };
 
@@ -166,6 +169,17 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
   // `bool(const RayStep&)`; returning false stops the traversal.
   template <class Visitor>
   TraversalEnd traverse(const Point3& a, const Point3& b, Visitor&& visit) const;
+  // The same walk, but a split octant whose subtree holds none of the labels
+  // last given to mark_subtrees is one step (RayStep::summary): a query that
+  // only cares about those labels (e.g. "is anything occupied on the way?")
+  // skips the refinement of empty and occluded space.
+  template <class Visitor>
+  TraversalEnd traverse_marked(const Point3& a, const Point3& b, Visitor&& visit) const;
+  // Sets SemiOcTreeNode::kMarked on every split octant (coarse voxels included)
+  // whose subtree holds a leaf with a label in `labels` (bit 1 << label), and
+  // clears it elsewhere. Later edits that add or remove such leaves make the
+  // marks stale until the next call; splitting an unmarked leaf keeps them valid.
+  void mark_subtrees(std::uint32_t labels);
 
   // --- file format ------------------------------------------------------------
   // .ot payload: a small header (magic, coarse level, exact resolution, node
@@ -186,13 +200,16 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
 
  private:
   struct SegmentFrame;  // per-segment constants of traverse()
-  template <class Visitor>
+  template <bool kMarkedOnly, class Visitor>
+  TraversalEnd traverse_impl(const Point3& a, const Point3& b, Visitor& visit) const;
+  template <bool kMarkedOnly, class Visitor>
   bool traverse_children(const SegmentFrame& f, const SemiOcTreeNode* node, unsigned level,
                          const std::int64_t base[3], double t_in, int p_in, double t_out, int p_out,
                          Visitor& visit) const;
   static std::uint64_t pack(const octomap::OcTreeKey& coarse_key_bits);
   void rebuild_coarse_index();
   void prune_subtree(SemiOcTreeNode* node);
+  bool mark_recurs(SemiOcTreeNode* node, std::uint32_t labels);
   void mark_coarse_recurs(SemiOcTreeNode* node, unsigned depth, octomap::OcTreeKey key);
   void delete_children(SemiOcTreeNode* node);
 

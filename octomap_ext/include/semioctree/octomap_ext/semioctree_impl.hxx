@@ -75,7 +75,7 @@ inline bool event_before(double t1, int p1, double t2, int p2) {
 }
 }  // namespace detail
 
-template <class Visitor>
+template <bool kMarkedOnly, class Visitor>
 bool SemiOcTree::traverse_children(const SegmentFrame& f, const SemiOcTreeNode* node,
                                    unsigned level, const std::int64_t base[3], double t_in,
                                    int p_in, double t_out, int p_out, Visitor& visit) const {
@@ -126,15 +126,17 @@ bool SemiOcTree::traverse_children(const SegmentFrame& f, const SemiOcTreeNode* 
 #pragma GCC unroll 3
     for (int i = 0; i < 3; ++i) child_base[i] = base[i] + ((child >> i) & 1u ? half : 0);
     const SemiOcTreeNode* c = nodeChildExists(node, child) ? getNodeChild(node, child) : nullptr;
-    if (c && level + 1 < coarse_level_ && nodeHasChildren(c)) {
-      if (!traverse_children(f, c, level + 1, child_base, t_cur, p_cur, t_next, p_next, visit))
+    const bool split = c && level + 1 < coarse_level_ && nodeHasChildren(c);
+    if (split && (!kMarkedOnly || c->has_flag(SemiOcTreeNode::kMarked))) {
+      if (!traverse_children<kMarkedOnly>(f, c, level + 1, child_base, t_cur, p_cur, t_next, p_next,
+                                          visit))
         return false;
     } else {
       const octomap::OcTreeKey key(static_cast<octomap::key_type>(child_base[0] + 32768),
                                    static_cast<octomap::key_type>(child_base[1] + 32768),
                                    static_cast<octomap::key_type>(child_base[2] + 32768));
       if (!visit(RayStep{key, level + 1, c,
-                         t_cur == -std::numeric_limits<double>::infinity() ? 0.0 : t_cur}))
+                         t_cur == -std::numeric_limits<double>::infinity() ? 0.0 : t_cur, split}))
         return false;
     }
     if (!flips) return true;  // left the node
@@ -147,6 +149,16 @@ bool SemiOcTree::traverse_children(const SegmentFrame& f, const SemiOcTreeNode* 
 
 template <class Visitor>
 TraversalEnd SemiOcTree::traverse(const Point3& a, const Point3& b, Visitor&& visit) const {
+  return traverse_impl<false>(a, b, visit);
+}
+
+template <class Visitor>
+TraversalEnd SemiOcTree::traverse_marked(const Point3& a, const Point3& b, Visitor&& visit) const {
+  return traverse_impl<true>(a, b, visit);
+}
+
+template <bool kMarkedOnly, class Visitor>
+TraversalEnd SemiOcTree::traverse_impl(const Point3& a, const Point3& b, Visitor& visit) const {
   SegmentFrame f;
   const double inv = resolution_factor;
   const double P[2][3] = {{a.x * inv, a.y * inv, a.z * inv}, {b.x * inv, b.y * inv, b.z * inv}};
@@ -202,10 +214,11 @@ TraversalEnd SemiOcTree::traverse(const Point3& a, const Point3& b, Visitor&& vi
     const SemiOcTreeNode* node =
         coarse_.find((std::uint64_t(key.k[0] >> k) << 32) | (std::uint64_t(key.k[1] >> k) << 16) |
                      std::uint64_t(key.k[2] >> k));
-    if (node && k > 0 && nodeHasChildren(node)) {
-      if (!traverse_children(f, node, 0, base, t_in, p_in, t_out, p_out, visit))
+    const bool split = node && k > 0 && nodeHasChildren(node);
+    if (split && (!kMarkedOnly || node->has_flag(SemiOcTreeNode::kMarked))) {
+      if (!traverse_children<kMarkedOnly>(f, node, 0, base, t_in, p_in, t_out, p_out, visit))
         return TraversalEnd::kStopped;
-    } else if (!visit(RayStep{key, 0, node, t_in == -kInf ? 0.0 : t_in})) {
+    } else if (!visit(RayStep{key, 0, node, t_in == -kInf ? 0.0 : t_in, split})) {
       return TraversalEnd::kStopped;
     }
     if (!exits) return TraversalEnd::kReachedEnd;

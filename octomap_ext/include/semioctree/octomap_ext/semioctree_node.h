@@ -19,6 +19,9 @@ class SemiOcTreeNode : public octomap::OcTreeNode {
     kCoarseRoot = 1u << 0,
     kSeen = 1u << 1,      // direct line of sight from some scanner position
     kBoundary = 1u << 2,  // partly visible octant (split during the occlusion study)
+    // Set by SemiOcTree::mark_subtrees on split octants whose subtree holds a
+    // leaf with one of the asked labels; transient (not copied, not written).
+    kMarked = 1u << 3,
   };
   static constexpr std::uint8_t kPersistentFlags = kSeen | kBoundary;
 
