@@ -16,3 +16,4 @@ target_compile_definitions(bench_raycast PRIVATE SEMIOCTREE_SOURCE_DIR="${PROJEC
 foreach(t test_scene test_scanner)
   target_include_directories(${t} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
 endforeach()
+semioctree_add_test(test_coverage SOURCES ${PROJECT_SOURCE_DIR}/tests/test_coverage.cpp LIBS semioctree_sim)

@@ -41,9 +41,8 @@ class LeafKeySet {
 
 }  // namespace
 
-std::unique_ptr<SemiOcTree> discretize(const Cloud& cloud, double ceiling_height,
-                                       const DiscretizeParams& params, DiscretizeReport* report) {
-  auto tree = std::make_unique<SemiOcTree>(params.leaf, params.coarse);  // validates L = r·2^k
+std::size_t extend_coarse_grid(SemiOcTree& tree, const Cloud& cloud, double ceiling_height,
+                               double extent_snap, Label label, DiscretizeReport* report) {
   DiscretizeReport rep;
   if (!(ceiling_height > 0) || !std::isfinite(ceiling_height))
     throw std::invalid_argument("ceiling height must be above the floor (z = 0), got " +
@@ -67,39 +66,60 @@ std::unique_ptr<SemiOcTree> discretize(const Cloud& cloud, double ceiling_height
   CoarseIndex cmin, cmax;
   const double below_ceiling = std::nextafter(ceiling_height, 0.0);
   // Snap the bounds outwards to the extent grid, then to coarse voxels.
-  const double snap = params.extent_snap > 0 ? params.extent_snap : tree->coarse_size();
+  const double snap = extent_snap > 0 ? extent_snap : tree.coarse_size();
   // (Half a leaf inside the snapped faces, so rounding cannot reach past them.)
-  const double inset = 0.5 * tree->leaf_size();
-  if (params.extent_snap > 0) {
+  const double inset = 0.5 * tree.leaf_size();
+  if (extent_snap > 0) {
     for (int a = 0; a < 2; ++a) {
       lo[a] = std::floor(lo[a] / snap) * snap + inset;
       hi[a] = (std::floor(hi[a] / snap) + 1) * snap - inset;
     }
   }
   const double top =
-      params.extent_snap > 0 ? std::ceil(below_ceiling / snap) * snap - inset : below_ceiling;
-  if (!tree->coarse_index_of({lo[0], lo[1], params.extent_snap > 0 ? inset : 0.0}, cmin) ||
-      !tree->coarse_index_of({hi[0], hi[1], top}, cmax))
+      extent_snap > 0 ? std::ceil(below_ceiling / snap) * snap - inset : below_ceiling;
+  if (!tree.coarse_index_of({lo[0], lo[1], extent_snap > 0 ? inset : 0.0}, cmin) ||
+      !tree.coarse_index_of({hi[0], hi[1], top}, cmax))
     throw std::invalid_argument("the cloud lies outside OctoMap's key range at this leaf size");
-  // The coarse grid over the room: every voxel an unsplit `empty` candidate.
+  std::size_t created = 0;
   for (int i = cmin.x; i <= cmax.x; ++i)
     for (int j = cmin.y; j <= cmax.y; ++j)
-      for (int l = cmin.z; l <= cmax.z; ++l) tree->create_coarse({i, j, l}, Label::kEmpty);
-  // Occupancy: the leaf of every point is occupied; its ancestors are split on
-  // the way. Points sharing a leaf are skipped through a hash set of leaf keys
-  // (a tree descent per point would cost more than the labelling itself).
-  const unsigned leaf = tree->coarse_level();
+      for (int l = cmin.z; l <= cmax.z; ++l) {
+        if (tree.find_coarse({i, j, l})) continue;
+        tree.create_coarse({i, j, l}, label);
+        ++created;
+      }
+  rep.min_coarse = cmin;
+  rep.max_coarse = cmax;
+  if (report) *report = rep;
+  return created;
+}
+
+std::size_t mark_occupied(SemiOcTree& tree, const Cloud& cloud, double ceiling_height) {
+  // The leaf of every point is occupied; its ancestors are split on the way.
+  // Points sharing a leaf are skipped through a hash set of leaf keys (a tree
+  // descent per point would cost more than the labelling itself).
+  const unsigned leaf = tree.coarse_level();
   LeafKeySet seen(cloud.size());
+  std::size_t marked = 0;
   for (const auto& p : cloud) {
     if (p.z < 0 || p.z >= ceiling_height) continue;
     octomap::OcTreeKey key;
-    if (!tree->key_of({p.x, p.y, p.z}, key)) continue;
+    if (!tree.key_of({p.x, p.y, p.z}, key)) continue;
     if (!seen.insert(key)) continue;
-    tree->set_label(key, leaf, Label::kOccupied);
-    ++rep.occupied_leaves;
+    if (!tree.find_coarse(tree.coarse_index(key))) continue;  // outside the grid
+    tree.set_label(key, leaf, Label::kOccupied);
+    ++marked;
   }
-  rep.min_coarse = cmin;
-  rep.max_coarse = cmax;
+  return marked;
+}
+
+std::unique_ptr<SemiOcTree> discretize(const Cloud& cloud, double ceiling_height,
+                                       const DiscretizeParams& params, DiscretizeReport* report) {
+  auto tree = std::make_unique<SemiOcTree>(params.leaf, params.coarse);  // validates L = r·2^k
+  DiscretizeReport rep;
+  // The coarse grid over the room: every voxel an unsplit `empty` candidate.
+  extend_coarse_grid(*tree, cloud, ceiling_height, params.extent_snap, Label::kEmpty, &rep);
+  rep.occupied_leaves = mark_occupied(*tree, cloud, ceiling_height);
   if (report) *report = rep;
   return tree;
 }

@@ -87,9 +87,23 @@ Label label_for(Visibility v) {
   }
 }
 
-bool candidate(Label l, bool only_occluded) {
-  if (only_occluded) return l == Label::kOccluded;
-  return l == Label::kEmpty || l == Label::kOccluded || l == Label::kOut;
+bool candidate(Label l, OcclusionScope scope) {
+  switch (scope) {
+    case OcclusionScope::kUnknown:
+      return l == Label::kUnknown;
+    case OcclusionScope::kNewViews:
+      return l == Label::kOccluded || l == Label::kOut;
+    default:
+      return l == Label::kEmpty || l == Label::kOccluded || l == Label::kOut ||
+             l == Label::kUnknown;
+  }
+}
+
+// What an octant's label already says of its visibility from earlier views
+// (OcclusionScope::kNewViews); hidden for the other scopes.
+Visibility known_visibility(Label l, OcclusionScope scope) {
+  if (scope != OcclusionScope::kNewViews) return Visibility::kHidden;
+  return l == Label::kOut ? Visibility::kThroughOpening : Visibility::kHidden;
 }
 
 struct Candidate {
@@ -209,7 +223,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
                      label_bit(Label::kWindow));
   std::vector<Candidate> todo;
   tree.for_each_octant([&](const Octant& o) {
-    if (candidate(o.label(), params.only_occluded))
+    if (candidate(o.label(), params.scope))
       todo.push_back({o.key, o.level, const_cast<SemiOcTreeNode*>(o.node)});
   });
   OcclusionReport report;
@@ -259,10 +273,12 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
     for (std::size_t c = 0; c < todo.size(); ++c) {
       const Candidate& o = todo[c];
       const std::uint32_t* id = &samples[9 * c];
-      const std::uint8_t first = visibility[id[0]];
+      const auto known = std::uint8_t(known_visibility(o.node->label(), params.scope));
+      const std::uint8_t first = std::max(known, visibility[id[0]]);
       bool uniform = true;
       if (o.level < leaf)
-        for (int i = 1; i < 9 && uniform; ++i) uniform = visibility[id[i]] == first;
+        for (int i = 1; i < 9 && uniform; ++i)
+          uniform = std::max(known, visibility[id[i]]) == first;
       ++report.octants_tested;
       if (uniform) {
         // A leaf of the tree: relabel in place.

@@ -359,6 +359,8 @@ std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceili
           const bool v = r > 0 && r + 1 < rows && raw_occ(c, r - 1) && raw_occ(c, r + 1);
           if (h || v) g.occupied[std::size_t(r) * g.cols + c] = 1;
         }
+      const auto filled = std::size_t(std::count(g.occupied.begin(), g.occupied.end(), 1));
+      if (double(filled) < p.min_wall_fill * double(g.occupied.size())) continue;
       g.los.assign(g.occupied.size(), -1);
 
       const int wall_index = int(rep.walls.size());

@@ -141,6 +141,37 @@ HeightPeak fit_peak(const std::vector<float>& z, double guess, const PreprocessP
 
 }  // namespace
 
+namespace {
+
+// Number of cells of side `spacing` holding a point: the size UniformSampling
+// would give, without building its output.
+std::size_t count_cells(const Cloud& cloud, double spacing) {
+  std::size_t capacity = 1024;
+  while (capacity < 2 * cloud.size()) capacity *= 2;
+  std::vector<std::uint64_t> slots(capacity, ~std::uint64_t(0));
+  const unsigned shift = 64 - unsigned(__builtin_ctzll(capacity));
+  const double inv = 1.0 / spacing;
+  std::size_t n = 0;
+  for (const auto& q : cloud) {
+    auto cell = [inv](float v) {
+      return std::uint64_t(std::int64_t(std::floor(double(v) * inv)) & 0x1fffff);
+    };
+    const std::uint64_t key = (cell(q.x) << 42) | (cell(q.y) << 21) | cell(q.z);
+    for (std::size_t i = std::size_t((key * 0x9E3779B97F4A7C15ull) >> shift);;
+         i = (i + 1) & (capacity - 1)) {
+      if (slots[i] == key) break;
+      if (slots[i] == ~std::uint64_t(0)) {
+        slots[i] = key;
+        ++n;
+        break;
+      }
+    }
+  }
+  return n;
+}
+
+}  // namespace
+
 Cloud::Ptr decimate(const Cloud& cloud, double spacing) {
   Cloud::Ptr out(new Cloud);
   if (spacing <= 0) {
@@ -233,21 +264,25 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   double spacing = p.min_spacing;
   Cloud::Ptr decimated;
   if (p.target_points > 0 && cut->size() > p.target_points) {
-    // Bisection on a log scale of the spacing (1 mm .. 0.5 m); stop within 3 %
-    // below the target. Each step is one UniformSampling pass.
-    double lo = std::log(0.001), hi = std::log(0.5);
-    for (int it = 0; it < 14; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      Cloud::Ptr d = decimate(*cut, std::max(spacing, std::exp(mid)));
-      if (d->size() > p.target_points) {
-        lo = mid;
-      } else {
-        hi = mid;
-        decimated = d;
-        if (d->size() >= p.target_points * 97 / 100) break;
-      }
+    // The spacing that leaves about the target: count the cells of a trial
+    // spacing (the partition PCL's UniformSampling keeps one point of) with a
+    // fast hash set, and update the spacing by the secant of log(count) over
+    // log(spacing) (≈ −2 for surfaces), then filter once with PCL. Aim 1 %
+    // under the target; accept 3 % under to exactly at it.
+    const double goal = 0.99 * double(p.target_points);
+    double s0 = std::max(spacing, 0.01), c0 = double(count_cells(*cut, s0));
+    double s1 = std::max(spacing, s0 * std::sqrt(c0 / goal));
+    for (int it = 0; it < 12; ++it) {
+      const double c1 = double(count_cells(*cut, s1));
+      if (c1 <= double(p.target_points) && c1 >= 0.97 * double(p.target_points)) break;
+      double slope = (std::log(c1) - std::log(c0)) / (std::log(s1) - std::log(s0));
+      if (!std::isfinite(slope) || slope > -0.5) slope = -2.0;  // flat or noisy: surfaces
+      s0 = s1;
+      c0 = c1;
+      s1 = std::max(spacing, std::exp(std::log(s1) + (std::log(goal) - std::log(c1)) / slope));
+      if (c1 > double(p.target_points) && s1 <= s0) s1 = s0 * 1.01;  // must get coarser
     }
-    spacing = std::max(spacing, std::exp(hi));
+    spacing = s1;
   }
   if (!decimated) decimated = spacing > 0 ? decimate(*cut, spacing) : cut;
   r.cloud = decimated;

@@ -123,8 +123,8 @@ TEST(Occlusion, SecondScannerUnoccludesWhatItSees) {
   const Point3 behind(2.9, 2.0, 0.8);  // behind the pillar from the first, in front of the second
   EXPECT_EQ(label_at(*tree, behind), Label::kOccluded);
   OcclusionParams again;
-  again.only_occluded = true;
-  const OcclusionReport rep = study_occlusion(*tree, {first, second}, again);
+  again.scope = OcclusionScope::kNewViews;
+  const OcclusionReport rep = study_occlusion(*tree, {second}, again);
   EXPECT_EQ(label_at(*tree, behind), Label::kEmpty);
   EXPECT_GT(rep.empty, 0u);
   // What neither sees stays occluded: right behind the pillar's corner, low down, from both.
@@ -154,6 +154,28 @@ TEST(Occlusion, SpaceSeenThroughADoorIsOut) {
   EXPECT_EQ(label_at(*tree, Point3(3.0, 0.3, 1.0)), Label::kOccluded);  // behind the wall
   EXPECT_EQ(label_at(*tree, Point3(1.0, 0.5, 1.0)), Label::kEmpty);     // this side
   EXPECT_EQ(label_at(*tree, Point3(2.025, 2.0, 1.0)), Label::kDoor);    // doors stay doors
+
+  // A second position beyond the door, with a short range: its direct view
+  // wins over `out` and `occluded`; what it cannot reach keeps what the first
+  // position said; empty space is not re-tested.
+  const Point3 far_out(3.8, 2.6, 1.0);    // through the door from the first, 1.02 m from the second
+  const Point3 near_wall(1.5, 0.3, 1.0);  // empty from the first, hidden from the second
+  ASSERT_EQ(label_at(*tree, far_out), Label::kOut);
+  ASSERT_EQ(label_at(*tree, near_wall), Label::kEmpty);
+  const Point3 behind_jamb(2.5, 1.2, 1.0);  // hidden from the first, 0.96 m from the second
+  ASSERT_EQ(label_at(*tree, behind_jamb), Label::kOccluded);
+  OcclusionParams next;
+  next.scope = OcclusionScope::kNewViews;
+  ScannerView second{Point3(3.0, 2.0, 1.2)};
+  second.min_range = 0.1;
+  second.max_range = 1.0;
+  const OcclusionReport rep = study_occlusion(*tree, {second}, next);
+  EXPECT_EQ(label_at(*tree, Point3(3.6, 2.0, 1.0)), Label::kEmpty);     // was out, now seen
+  EXPECT_EQ(label_at(*tree, behind_jamb), Label::kEmpty);               // was occluded, now seen
+  EXPECT_EQ(label_at(*tree, Point3(3.0, 0.3, 1.0)), Label::kOccluded);  // out of its range
+  EXPECT_EQ(label_at(*tree, far_out), Label::kOut);                     // out of its range
+  EXPECT_EQ(label_at(*tree, near_wall), Label::kEmpty);                 // not re-tested
+  EXPECT_GT(rep.octants_tested, 0u);
 }
 
 TEST(Occlusion, RangeAndElevationLimits) {

@@ -38,4 +38,14 @@ std::unique_ptr<SemiOcTree> discretize(const Cloud& cloud, double ceiling_height
                                        const DiscretizeParams& params,
                                        DiscretizeReport* report = nullptr);
 
+// The two steps of discretize, also used to add later scans (stage 8).
+// Creates the coarse voxels over the cloud's bounds (snapped to `extent_snap`,
+// 0: the coarse size) that do not exist yet, labelled `label`; returns how many.
+std::size_t extend_coarse_grid(SemiOcTree& tree, const Cloud& cloud, double ceiling_height,
+                               double extent_snap, Label label, DiscretizeReport* report = nullptr);
+// Labels the leaf of every point inside the coarse grid occupied, splitting
+// the octants above it (their other children keep the label they had, the
+// finer resolution wins); returns the number of distinct leaves.
+std::size_t mark_occupied(SemiOcTree& tree, const Cloud& cloud, double ceiling_height);
+
 }  // namespace semioctree

@@ -26,10 +26,22 @@ struct ScannerView {
 
 enum class Visibility : std::uint8_t { kHidden = 0, kThroughOpening = 1, kDirect = 2 };
 
+// Which octants a study (re)classifies.
+enum class OcclusionScope : std::uint8_t {
+  // Every empty, occluded, out or unknown octant, from all the views given.
+  kAll,
+  // Only unknown octants (space new to the map), from all the views given.
+  kUnknown,
+  // Only occluded and out octants, from the views given (the new scanner
+  // positions), keeping what their label already says: occluded means hidden
+  // from the earlier positions, out means seen through an opening. The direct
+  // view from a new position wins, so out can become empty and occluded
+  // anything (DESIGN.md stage 8).
+  kNewViews,
+};
+
 struct OcclusionParams {
-  // Only re-test octants labelled occluded (a new scanner position), instead
-  // of every empty/occluded/out octant.
-  bool only_occluded = false;
+  OcclusionScope scope = OcclusionScope::kAll;
   // Worker threads (0: one per core); the result is the same for any count.
   unsigned threads = 0;
 };

@@ -33,6 +33,11 @@ struct OpeningParams {
   double min_wall_length = 1.5;            // a wall segment is at least this long, m
   double min_wall_height_fraction = 0.75;  // its points span this share of the room height
   double wall_split_gap = 0.5;  // columns empty at every height over this length split a plane, m
+  // Not in the paper: share of a wall segment's grid (floor to ceiling) that
+  // must hold points. A vertical plane through scattered furniture (a column,
+  // a bench's side, a screen) spans the room's height too, but is mostly
+  // empty, and its gaps would pass for doors.
+  double min_wall_fill = 0.5;
 
   // --- wall grid ---
   double cell = 0.0;        // grid cell side, m (0: the tree's leaf size)

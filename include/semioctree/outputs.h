@@ -6,6 +6,7 @@
 #include <string>
 
 #include "semioctree/octomap_ext/semioctree.h"
+#include "semioctree/scan_io.h"
 #include "semioctree/slice_image.h"
 
 namespace semioctree {
@@ -20,5 +21,9 @@ struct MapFiles {
 // Creates `dir` if needed. Throws FileError.
 void write_map_files(const SemiOcTree& tree, const std::string& dir, const SliceOptions& slice,
                      const MapFiles& names = {});
+
+// Binary little-endian PLY of the points (x y z as float), written atomically;
+// CloudCompare, PCL and MeshLab read it. Throws FileError.
+void write_cloud_ply(const Cloud& cloud, const std::string& path);
 
 }  // namespace semioctree

@@ -1,0 +1,70 @@
+// Stage 8 (paper 2.3): the map carried from scan to scan. The first scan is
+// discretized, its doors and windows found and its octants classified; each
+// later scan, registered into the same (survey) frame, refines that map
+// instead of rebuilding it: the coarse grid grows over new ground (new voxels
+// unknown), its points make their leaves occupied (the finer resolution wins),
+// openings are detected again on the merged cloud, space new to the map is
+// classified from every position, and only what is still occluded or out is
+// re-tested, from the new position (its direct view wins). Because the coarse
+// grid is fixed to the world, the voxels of every scan coincide.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "semioctree/discretize.h"
+#include "semioctree/occlusion.h"
+#include "semioctree/openings.h"
+
+namespace semioctree {
+
+struct SurveyMapParams {
+  DiscretizeParams grid;
+  ScannerView limits;  // range and elevation limits of the scanner (position unused)
+  OpeningParams openings;
+  // The merged cloud (registration target, openings input, cloud.ply) keeps
+  // one point per cell of this size, so it does not grow with every scan.
+  double merged_spacing = 0.02;
+  unsigned threads = 0;  // occlusion study threads (0: one per core)
+};
+
+struct ScanUpdateReport {
+  std::size_t scan_index = 0;
+  std::size_t new_coarse_voxels = 0;
+  std::size_t occupied_leaves = 0;  // distinct leaves of this scan's points
+  OpeningsReport openings;
+  std::size_t openings_found = 0;
+  OcclusionReport new_space;  // unknown octants, from every position (later scans)
+  OcclusionReport retest;     // first scan: everything; later: occluded/out from the new position
+  double seconds_occupancy = 0, seconds_openings = 0, seconds_occlusion = 0;
+};
+
+class SurveyMap {
+ public:
+  explicit SurveyMap(const SurveyMapParams& params);
+
+  // Adds one scan: `points` levelled (floor at z = 0) and registered into the
+  // survey frame, `scanner` its optical centre there. The first scan fixes the
+  // ceiling height; later points above it are left out.
+  ScanUpdateReport add_scan(const Cloud& points, const Point3& scanner, double ceiling_height);
+
+  bool empty() const { return !tree_; }
+  const SemiOcTree& tree() const { return *tree_; }
+  SemiOcTree& tree() { return *tree_; }
+  const Cloud& merged_cloud() const { return *merged_; }
+  const std::vector<Point3>& scanners() const { return scanners_; }
+  const std::vector<DetectedOpening>& openings() const { return openings_; }
+  double ceiling_height() const { return ceiling_; }
+  std::vector<ScannerView> views() const;
+  const SurveyMapParams& params() const { return params_; }
+
+ private:
+  SurveyMapParams params_;
+  std::unique_ptr<SemiOcTree> tree_;
+  Cloud::Ptr merged_;
+  std::vector<Point3> scanners_;
+  std::vector<DetectedOpening> openings_;
+  double ceiling_ = 0;
+};
+
+}  // namespace semioctree

@@ -1,0 +1,75 @@
+#include "semioctree/update.h"
+
+#include <chrono>
+
+#include "semioctree/preprocess.h"
+
+namespace semioctree {
+
+namespace {
+double since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+SurveyMap::SurveyMap(const SurveyMapParams& params) : params_(params), merged_(new Cloud) {
+  SemiOcTree::coarse_level_for(params.grid.leaf, params.grid.coarse);  // validates
+}
+
+std::vector<ScannerView> SurveyMap::views() const {
+  std::vector<ScannerView> out;
+  for (const Point3& s : scanners_) {
+    ScannerView v = params_.limits;
+    v.position = s;
+    out.push_back(v);
+  }
+  return out;
+}
+
+ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,
+                                     double ceiling_height) {
+  ScanUpdateReport rep;
+  rep.scan_index = scanners_.size();
+  const bool first = !tree_;
+  auto t0 = std::chrono::steady_clock::now();
+  if (first) {
+    ceiling_ = ceiling_height;
+    DiscretizeReport dr;
+    tree_ = discretize(points, ceiling_, params_.grid, &dr);
+    rep.new_coarse_voxels = tree_->coarse_count();
+    rep.occupied_leaves = dr.occupied_leaves;
+  } else {
+    // New ground is unknown until classified; the scan's leaves are occupied.
+    rep.new_coarse_voxels =
+        extend_coarse_grid(*tree_, points, ceiling_, params_.grid.extent_snap, Label::kUnknown);
+    rep.occupied_leaves = mark_occupied(*tree_, points, ceiling_);
+  }
+  scanners_.push_back(scanner);
+  *merged_ += points;
+  if (params_.merged_spacing > 0) merged_ = decimate(*merged_, params_.merged_spacing);
+  rep.seconds_occupancy = since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  openings_ =
+      detect_openings(*merged_, ceiling_, *tree_, scanners_, params_.openings, &rep.openings);
+  label_openings(*tree_, openings_);
+  rep.openings_found = openings_.size();
+  rep.seconds_openings = since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  OcclusionParams op;
+  op.threads = params_.threads;
+  const std::vector<ScannerView> all = views();
+  if (first) {
+    rep.retest = study_occlusion(*tree_, all, op);
+  } else {
+    op.scope = OcclusionScope::kUnknown;
+    rep.new_space = study_occlusion(*tree_, all, op);
+    op.scope = OcclusionScope::kNewViews;
+    rep.retest = study_occlusion(*tree_, {all.back()}, op);
+  }
+  rep.seconds_occlusion = since(t0);
+  return rep;
+}
+
+}  // namespace semioctree
