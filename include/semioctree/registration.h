@@ -1,0 +1,87 @@
+// Stage 2 (paper 2.3): scans after the first are placed in the survey frame by
+// the robot's reported (odometry) pose, then refined by ICP against the merged
+// cloud of the previous scans.
+//
+// Frames. The survey frame is levelled with the floor at z = 0 (as `preprocess`
+// leaves a cloud) and has the odometry's x, y and heading. For scan i, with its
+// points in the scanner frame and the reported pose (x_i, y_i, yaw_i):
+//   pre_i   = preprocess(points)                 // pre_i.transform: scanner → levelled scanner
+//   place_i = planar_pose(x_i, y_i, yaw_i)       // levelled scanner → survey (the guess)
+//   guess_i = place_i · pre_i.cloud              // in the survey frame
+// Scan 0 is not registered: guess_0 starts the merged cloud, and its pose is
+// place_0 · pre_0.transform. For i > 0:
+//   r = register_scan(guess_i, merged cloud of scans 0..i-1)
+//   registered cloud = r.correction · guess_i    // append it to the merged cloud
+//   scanner pose (scanner → survey) = r.correction · place_i · pre_i.transform
+// Levelling each scan in its own scanner frame, before placing it, keeps the
+// levelling rotation about the scanner (it cannot swing the scan sideways as a
+// rotation about a far survey origin would) and makes it independent of the
+// drifting odometry. A reported pose given as a ScanPose contributes only
+// position().x(), position().y() and yaw_deg(): the floor gives z and the tilt.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <stdexcept>
+
+#include "semioctree/scan_io.h"
+
+namespace semioctree {
+
+struct RegistrationParams {
+  double voxel = 0.05;                 // both clouds are voxel-downsampled to this for ICP, m
+  double max_correspondence = 0.5;     // first (coarse) ICP stage, m
+  double final_correspondence = 0.05;  // last stage, m; stages in between shrink it ≤ 4× each
+  int max_iterations = 50;             // per stage
+  // Failure bounds, both measured over final_correspondence on the downsampled
+  // clouds. Two samplings of the same surfaces at 0.05 m, well aligned, give a
+  // fitness of 2-3e-4 m² (the nearest voxel centroid lies a couple of cm away
+  // along the surface); unrelated points spread over the 0.05 m band give
+  // ≈ final_correspondence² / 3 = 8e-4 m². Scale max_fitness with
+  // final_correspondence² (and voxel²) when changing those.
+  double max_fitness = 6e-4;  // m²
+  // Share of source points with a target point within final_correspondence.
+  // A second scan 2.4 m from the first in the same room overlaps ~0.7; a scan
+  // that sees mostly new space (another room) may fall below this bound.
+  double min_overlap = 0.25;
+  // true: estimate x, y and yaw only. Both clouds are levelled with the floor at
+  // z = 0 by `preprocess`, which fixes z, roll and pitch from the whole floor —
+  // far better than ICP can on clouds whose floor and ceiling were cut out (only
+  // a few bench tops and sills constrain them). Dropping those 3 DoF also removes
+  // the ways a coarse stage can go wrong (tilting or sinking to fit a wall) and
+  // leaves fewer unknowns for the same data. false: full 6 DoF (clouds that are
+  // not levelled alike).
+  bool planar = true;
+  std::size_t min_points = 100;  // fewer points in either cloud after downsampling: error
+};
+
+struct RegistrationResult {
+  Eigen::Isometry3d correction = Eigen::Isometry3d::Identity();  // refined = correction · guess
+  double fitness = 0;      // mean squared distance of the source points that have a target point
+                           // within final_correspondence (as PCL's getFitnessScore), m²
+  double overlap = 0;      // share of source points with a target point within final_correspondence
+  bool converged = false;  // the last stage met ICP's convergence criteria before max_iterations
+  double translation_m = 0, rotation_deg = 0;        // size of the correction
+  std::size_t source_points = 0, target_points = 0;  // after downsampling
+  int iterations = 0;                                // ICP iterations, all stages
+  double seconds = 0;                                // wall-clock time of register_scan
+};
+
+class RegistrationError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// `source` is already placed by the initial guess (odometry) in the target's
+// frame. Throws RegistrationError (the message gives fitness, overlap and the
+// bounds) when the result fails the bounds, when ICP finds no correspondences,
+// or when either cloud is empty or too small; std::invalid_argument for
+// inconsistent parameters.
+RegistrationResult register_scan(const Cloud& source, const Cloud& target,
+                                 const RegistrationParams& params = {});
+
+// Placement of a levelled scan by a planar pose: rotation `yaw_deg` about z,
+// then translation (x, y, 0).
+Eigen::Isometry3d planar_pose(double x, double y, double yaw_deg);
+
+}  // namespace semioctree

@@ -1,0 +1,11 @@
+# Tests of the registration stage (include/semioctree/registration.h). The lab
+# acceptance test needs the synthetic scanner; without it only the analytic tests build.
+if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/test_registration.cpp)
+  if(TARGET semioctree_sim)
+    semioctree_add_test(test_registration SOURCES test_registration.cpp LIBS semioctree semioctree_sim)
+    target_compile_definitions(test_registration PRIVATE SEMIOCTREE_HAVE_SIM=1)
+  else()
+    semioctree_add_test(test_registration SOURCES test_registration.cpp LIBS semioctree)
+  endif()
+  target_include_directories(test_registration PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+endif()
