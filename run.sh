@@ -38,19 +38,17 @@ build() {
 }
 
 main_job() {
-  # The most complete part of the pipeline that exists so far: the synthetic
-  # scanner scans the built-in lab scene from the robot's start; the scan is
-  # preprocessed and discretized into a SemiOcTree (all map files written),
-  # classified (doors, windows, occlusion study), then compared with the
-  # homogeneous grid (the paper's Table 1, Table 2, Fig 15).
+  # The example survey: the simulated robot surveys the built-in lab scene
+  # (scan → preprocess → register → update → next best view → move) until the
+  # stop percentage is below 0.1 %; then the first scan's map is compared with
+  # the homogeneous grid (the paper's Table 1, Table 2, Fig 15).
   local cli="$BUILD_DIR/semioctree" scene=sim/scenes/lab.scene.json
-  mkdir -p survey_out
+  rm -rf survey_out
   "$cli" scene-info "$scene"
-  "$cli" discretize --scene "$scene" --target-points 400000 --out survey_out/scan_00
+  "$cli" survey --scene "$scene" --out survey_out
   "$cli" info survey_out/scan_00/semioctree.ot
-  "$cli" classify --scene "$scene" --target-points 400000 --out survey_out/classified
   "$cli" compare --scene "$scene" --target-points 400000 --out survey_out/compare
-  echo "== done: survey_out/scan_00 (occupancy), survey_out/classified (all classes, openings.json),"
+  echo "== done: survey_out/survey.json, survey_out/scan_NN/ (maps, slice.png, cloud.ply),"
   echo "   survey_out/compare (comparison.md, fig15_octants.png)"
 }
 

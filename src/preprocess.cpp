@@ -198,17 +198,27 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   const auto planes = find_horizontal_planes(input, p);
   if (planes.empty())
     throw PreprocessError("no horizontal plane found (no floor and no ceiling in the cloud?)");
-  // Floor: the lowest horizontal plane; ceiling: the highest. Heights compared
-  // at the cloud's centre.
+  // Floor: the lowest horizontal plane below the cloud's centroid that holds
+  // at least a third as many points as the largest one there. Not simply the
+  // lowest: a scanner near a window also sees the ground outside, lower than
+  // the floor but a small plane (the floor lies all around the scanner).
+  // Not simply the largest: a big table can out-count a cluttered floor.
+  // Ceiling: the highest plane. Heights compared at the centroid.
   Eigen::Vector4f centroid;
   pcl::compute3DCentroid(input, centroid);
   const Eigen::Vector2d c(centroid.x(), centroid.y());
-  auto lowest = std::min_element(planes.begin(), planes.end(), [&](const auto& a, const auto& b) {
-    return a.height_at(c) < b.height_at(c);
-  });
-  auto highest = std::max_element(planes.begin(), planes.end(), [&](const auto& a, const auto& b) {
-    return a.height_at(c) < b.height_at(c);
-  });
+  auto by_height = [&](const auto& a, const auto& b) { return a.height_at(c) < b.height_at(c); };
+  auto lowest = std::min_element(planes.begin(), planes.end(), by_height);
+  auto highest = std::max_element(planes.begin(), planes.end(), by_height);
+  std::size_t largest_below = 0;
+  for (const auto& pl : planes)
+    if (pl.height_at(c) < centroid.z()) largest_below = std::max(largest_below, pl.inliers);
+  for (auto it = planes.begin(); it != planes.end(); ++it) {
+    const bool big = 3 * it->inliers >= largest_below;
+    const bool lowest_big = 3 * lowest->inliers >= largest_below;
+    if (it->height_at(c) < centroid.z() && big && (!lowest_big || by_height(*it, *lowest)))
+      lowest = it;
+  }
   const double gap = highest->height_at(c) - lowest->height_at(c);
   if (gap < p.min_room_height) {
     std::ostringstream m;

@@ -16,9 +16,11 @@ int main(int argc, char** argv) {
   semioctree::cli::add_discretize_command(app);
   semioctree::cli::add_compare_command(app);
   semioctree::cli::add_classify_command(app);
+  semioctree::cli::add_nbv_command(app);
 #ifdef SEMIOCTREE_HAVE_SIM
   semioctree::cli::add_scan_command(app);
   semioctree::cli::add_scene_info_command(app);
+  semioctree::cli::add_survey_command(app);
 #endif
   try {
     app.parse(argc, argv);

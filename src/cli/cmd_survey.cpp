@@ -1,0 +1,319 @@
+// `semioctree survey --scene FILE --out DIR ...`: the autonomous survey of a
+// scene with the simulated robot and scanner: scan → preprocess → register →
+// update → NBV → move, until the stop percentage falls below its threshold, no
+// feasible candidate remains, or the scan budget is spent.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <random>
+#include <stdexcept>
+
+#include "commands.h"
+#include "semioctree/sim/coverage.h"
+#include "semioctree/sim/geometry.h"
+#include "semioctree/sim/ground_truth.h"
+#include "semioctree/sim/raycaster.h"
+#include "semioctree/sim/robot.h"
+#include "semioctree/sim/scanner.h"
+#include "semioctree/sim/scene.h"
+#include "survey_session.h"
+
+namespace semioctree::cli {
+
+namespace {
+
+struct SurveyOptions {
+  std::string scene;
+  std::string out;
+  double leaf = 0.05, coarse = 0.8;
+  double stop = 0.1;
+  int max_scans = 10;
+  int method = 1;
+  int level = -1;  // method 2: the level scored (-1: the leaf)
+  bool homogeneous = false;
+  std::uint64_t seed = 1;
+  std::size_t target_points = 400000;
+  double candidate_spacing = 0.5;
+  std::string policy = "nbv";  // or "random": a random feasible candidate (the baseline)
+  std::vector<double> start;   // X,Y: replaces the scene's robot start
+  std::string cache;
+  bool coverage = true;
+  unsigned threads = 0;
+};
+
+double since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+nlohmann::json true_pose_json(const sim::Scan& s) {
+  return pose_json(s.sensor_to_world());
+}
+
+void run_survey(const SurveyOptions& o) {
+  const auto t_start = std::chrono::steady_clock::now();
+  if (o.max_scans < 1)
+    throw std::invalid_argument("--max-scans must be at least 1 (got " +
+                                std::to_string(o.max_scans) + ")");
+  if (!(o.stop >= 0)) throw std::invalid_argument("--stop must be a percentage ≥ 0");
+  SemiOcTree::coarse_level_for(o.leaf, o.coarse);  // L = r·2^k, or a clear error
+
+  std::optional<Eigen::Vector2d> start_override;
+  if (!o.start.empty()) {
+    if (o.start.size() != 2) throw std::invalid_argument("--start: expected X,Y (2 numbers)");
+    start_override = Eigen::Vector2d(o.start[0], o.start[1]);
+  }
+  const sim::Scene scene = sim::load_scene(o.scene, start_override);
+  const sim::GroundTruth truth(scene);
+  const Eigen::Vector2d start = scene.robot.start;
+  const sim::FloorPlan plan = truth.floor_plan(0.05);
+  char where[96];
+  std::snprintf(where, sizeof where, "the robot's start (%.2f, %.2f)", start.x(), start.y());
+  if (!plan.in_survey_area(start))
+    throw std::invalid_argument(std::string(where) + " in " + o.scene +
+                                " is outside the floor the robot can reach (the survey area, " +
+                                std::to_string(int(std::round(plan.survey_area_m2))) +
+                                " m²): no reachable start");
+  if (!truth.standing_free(start)) {
+    char radius[32];
+    std::snprintf(radius, sizeof radius, "%.2f m", scene.robot.radius);
+    throw std::invalid_argument(std::string(where) + " in " + o.scene +
+                                " is inside an obstacle or closer than the robot's radius (" +
+                                radius + ") to one");
+  }
+  std::printf(
+      "survey of %s: start (%.2f, %.2f), survey area %.1f m², robot radius %.2f m, "
+      "scanner at %.2f m\n",
+      o.scene.c_str(), start.x(), start.y(), plan.survey_area_m2, scene.robot.radius,
+      scene.scanner.height);
+
+  SessionParams p;
+  p.out = o.out;
+  p.map.grid = {o.leaf, o.homogeneous ? o.leaf : o.coarse, o.homogeneous ? o.coarse : 0.0};
+  p.map.threads = o.threads;
+  p.map.limits.min_range = scene.scanner.min_range;
+  p.map.limits.max_range = scene.scanner.max_range;
+  p.map.limits.elevation_min_deg = scene.scanner.elevation_min_deg;
+  p.map.limits.elevation_max_deg = scene.scanner.elevation_max_deg;
+  p.preprocess.target_points = o.target_points;
+  p.nbv.method = o.method;
+  if (o.level >= 0) p.nbv.level = unsigned(o.level);
+  p.nbv.candidate_spacing = o.candidate_spacing;
+  p.nbv.threads = o.threads;
+  p.nbv.limits = p.map.limits;
+  p.robot.radius = scene.robot.radius;
+  p.robot.scanner_height = scene.scanner.height;
+  p.stop_percent = o.stop;
+  if (o.homogeneous)
+    std::printf("homogeneous grid of %.3f m voxels (the baseline): expect it to be slow\n", o.leaf);
+  std::filesystem::create_directories(o.out);
+
+  const auto caster = sim::make_ray_caster(sim::tessellate(scene));
+  sim::Robot robot(scene.robot, o.seed);
+  std::mt19937_64 choice(o.seed);  // --policy random
+  SurveySession session(p);
+  std::vector<Eigen::Vector3f> measured;  // every registered point, world frame (coverage)
+  Eigen::Isometry3d survey_to_world = Eigen::Isometry3d::Identity();
+  std::string stopped_because = "max_scans";
+  nlohmann::json pose_errors = nlohmann::json::array();
+  sim::Pose2 previous_reported;
+  Eigen::Isometry3d previous_estimate = Eigen::Isometry3d::Identity();
+  double previous_distance = 0;
+  for (int i = 0; i < o.max_scans; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    sim::ScanOptions so;
+    so.seed = o.seed * 1000 + std::uint64_t(i);
+    so.threads = o.threads;
+    so.with_intensity = false;
+    const sim::Scan s = sim::scan(*caster, scene.scanner, robot.true_pose(), so);
+    const double scan_seconds = since(t0);
+    const sim::Pose2 reported = robot.reported_pose();
+    std::printf("scan %d at (%.2f, %.2f) reported (%.2f, %.2f, %.1f°): %zu points [%.2f s]\n", i,
+                robot.true_pose().x, robot.true_pose().y, reported.x, reported.y, reported.yaw_deg,
+                s.points.size(), scan_seconds);
+    std::fflush(stdout);
+
+    IncomingScan in;
+    in.points.reset(new Cloud);
+    in.points->reserve(s.points.size());
+    for (const Eigen::Vector3f& q : s.points) in.points->push_back({q.x(), q.y(), q.z()});
+    in.points_raw = s.points.size();
+    // Initial guess: the previous scan's registered pose moved by the odometry
+    // of the leg since (odometry drifts; only its increments are trusted).
+    if (i == 0) {
+      in.x = reported.x;
+      in.y = reported.y;
+      in.yaw_deg = reported.yaw_deg;
+    } else {
+      const Eigen::Isometry3d leg =
+          planar_pose(previous_reported.x, previous_reported.y, previous_reported.yaw_deg)
+              .inverse() *
+          planar_pose(reported.x, reported.y, reported.yaw_deg);
+      const Eigen::Isometry3d guess = previous_estimate * leg;
+      in.x = guess.translation().x();
+      in.y = guess.translation().y();
+      in.yaw_deg = yaw_deg_of(guess);
+      const double d = robot.distance_driven() - previous_distance;
+      in.max_correction_m = 0.1 + 5 * scene.robot.odometry_sigma_xy * d;
+      in.max_correction_deg = 1.0 + 5 * scene.robot.odometry_sigma_yaw_deg * d;
+    }
+    if (i > 0) {
+      const Eigen::Vector3d g(in.x, in.y, 0), t = survey_to_world.inverse() * s.origin();
+      std::printf("  initial guess (odometry of the leg): %.3f m off the true position\n",
+                  (g - t).head<2>().norm());
+    }
+    ScanOutcome r;
+    try {
+      r = session.add_scan(in);
+    } catch (const RegistrationError& e) {
+      // Stop before the map is touched: what was built so far stays valid.
+      nlohmann::json extra = {{"scene", o.scene},
+                              {"seed", o.seed},
+                              {"error", e.what()},
+                              {"seconds_total", since(t_start)}};
+      session.write_survey_json("registration_failed", extra);
+      throw;
+    }
+    previous_reported = reported;
+    previous_distance = robot.distance_driven();
+    {
+      const Eigen::Vector3d t = r.scanner_to_survey.translation();
+      previous_estimate = planar_pose(t.x(), t.y(), yaw_deg_of(r.scanner_to_survey));
+    }
+
+    // The survey frame is the first scan's estimate of the world; map back through it.
+    const Eigen::Isometry3d truth_pose = s.sensor_to_world();
+    if (i == 0) survey_to_world = truth_pose * r.scanner_to_survey.inverse();
+    const Eigen::Isometry3d estimated_world = survey_to_world * r.scanner_to_survey;
+    const double err_m = (estimated_world.translation() - truth_pose.translation()).norm();
+    double err_deg = std::remainder(yaw_deg_of(estimated_world) - yaw_deg_of(truth_pose), 360.0);
+    err_deg = std::abs(err_deg);
+    nlohmann::json& rec = session.last_record();
+    rec["true_pose"] = true_pose_json(s);
+    rec["pose_error"] = {{"m", err_m}, {"deg", err_deg}};
+    rec["seconds"]["scan"] = scan_seconds;
+    if (i > 0) pose_errors.push_back({{"m", err_m}, {"deg", err_deg}});
+    if (i > 0)
+      std::printf("  pose error after registration: %.1f mm, %.3f°\n", 1000 * err_m, err_deg);
+    if (o.coverage) {
+      const Eigen::Affine3f to_world = (survey_to_world * r.scanner_to_survey).cast<float>();
+      for (const Eigen::Vector3f& q : s.points) measured.push_back(to_world * q);
+    }
+
+    if (!r.nbv) {
+      stopped_because = "no_candidate";
+      std::printf("stop: no feasible candidate remains\n");
+      break;
+    }
+    if (r.stop_percent < o.stop) {
+      stopped_because = "stop_percentage";
+      std::printf("stop: stop percentage %.3f %% < %.3f %%\n", r.stop_percent, o.stop);
+      break;
+    }
+    if (i + 1 == o.max_scans) {
+      std::printf("stop: scan budget of %d spent (stop percentage %.3f %%)\n", o.max_scans,
+                  r.stop_percent);
+      break;
+    }
+    // Drive to the NBV (the survey frame mapped to the world through the first
+    // scan), or, as the baseline, to a random feasible candidate.
+    Point3 next = r.nbv->position;
+    if (o.policy == "random") {
+      std::uniform_int_distribution<std::size_t> pick(0, r.candidates.size() - 1);
+      next = r.candidates[pick(choice)].position;
+    }
+    const Eigen::Vector3d target = survey_to_world * Eigen::Vector3d(next.x, next.y, 0.0);
+    robot.move_to({target.x(), target.y(), robot.true_pose().yaw_deg});
+    std::printf("move to the %s (%.2f, %.2f): %.2f m driven so far\n",
+                o.policy == "random" ? "random candidate" : "NBV", target.x(), target.y(),
+                robot.distance_driven());
+    std::fflush(stdout);
+  }
+
+  nlohmann::json extra;
+  extra["scene"] = o.scene;
+  extra["seed"] = o.seed;
+  extra["homogeneous"] = o.homogeneous;
+  extra["policy"] = o.policy;
+  extra["distance_driven_m"] = robot.distance_driven();
+  if (o.coverage) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::string cache = o.cache.empty() ? sim::default_cache_dir() : o.cache;
+    const sim::CoverageReference ref = sim::load_or_compute_coverage_reference(truth, cache);
+    const sim::Coverage c = sim::measure_coverage(ref, measured);
+    extra["coverage"] = {{"reference_points", c.reference_points},
+                         {"covered", c.covered},
+                         {"percent", c.percent},
+                         {"reference_cached", ref.from_cache}};
+    std::printf(
+        "coverage: %zu of %zu reference surface samples within 3 cm of a point: %.2f %% "
+        "(reference %s) [%.2f s]\n",
+        c.covered, c.reference_points, c.percent, ref.from_cache ? "from the cache" : "computed",
+        since(t0));
+  }
+  extra["seconds_total"] = since(t_start);
+  session.write_survey_json(stopped_because, extra);
+  std::printf("survey: %zu scans, stopped because %s; wrote %s/survey.json [%.1f s]\n",
+              session.scans(), stopped_because.c_str(), o.out.c_str(), since(t_start));
+}
+
+}  // namespace
+
+void add_survey_command(CLI::App& app) {
+  auto o = std::make_shared<SurveyOptions>();
+  auto* cmd = app.add_subcommand(
+      "survey",
+      "Autonomous survey of a scene with the simulated robot and laser scanner: scan, "
+      "preprocess, register (odometry + ICP), update the semioctree (occupancy, doors and "
+      "windows, occlusion), choose the next best view, drive there; until the stop percentage "
+      "is below --stop, no feasible candidate remains, or --max-scans scans are taken. Writes "
+      "survey.json and scan_NN/ (semioctree.ot, labels_color.ot, occupancy.bt, slice.png, "
+      "cloud.ply) per scan.");
+  cmd->add_option("--scene", o->scene, "scene file (.scene.json, mesh or .bt)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--out", o->out, "output directory")->required();
+  cmd->add_option("--leaf", o->leaf, "leaf (finest octant) size r, m")->capture_default_str();
+  cmd->add_option("--coarse", o->coarse, "coarse voxel size L = r*2^k, m")->capture_default_str();
+  cmd->add_option("--stop", o->stop, "stop percentage threshold (Eq 5), %")->capture_default_str();
+  cmd->add_option("--max-scans", o->max_scans, "scan budget")->capture_default_str();
+  cmd->add_option("--method", o->method,
+                  "NBV scoring: 1 = all levels weighted by volume, 2 = at the leaf level")
+      ->check(CLI::IsMember({1, 2}))
+      ->capture_default_str();
+  cmd->add_option("--level", o->level,
+                  "method 2: the octree level scored, 0 = coarse voxels ... k = leaf (default: the "
+                  "leaf)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--homogeneous", o->homogeneous,
+                "use the homogeneous grid of leaf-size voxels (the paper's baseline) instead of "
+                "the semioctree");
+  cmd->add_option("--seed", o->seed, "seed of the scanner noise and the odometry drift")
+      ->capture_default_str();
+  cmd->add_option("--target-points", o->target_points,
+                  "decimate each scan to about this many points (paper: 400 000)")
+      ->capture_default_str();
+  cmd->add_option("--candidate-spacing", o->candidate_spacing,
+                  "spacing of the NBV candidate grid at scanner height, m")
+      ->capture_default_str();
+  cmd->add_option("--policy", o->policy,
+                  "where to scan next: nbv (the best candidate) or random (a random feasible "
+                  "candidate: the baseline the NBV is compared with)")
+      ->check(CLI::IsMember({"nbv", "random"}))
+      ->capture_default_str();
+  cmd->add_option("--start", o->start, "robot start X,Y in the scene (default: the scene's)")
+      ->delimiter(',')
+      ->expected(2);
+  cmd->add_option("--cache", o->cache,
+                  "directory of cached coverage references (default: $XDG_CACHE_HOME/semioctree "
+                  "or ~/.cache/semioctree)");
+  cmd->add_flag("!--no-coverage", o->coverage,
+                "skip the coverage of the scene's surfaces in survey.json");
+  cmd->add_option("--threads", o->threads, "worker threads (0: one per core)")
+      ->capture_default_str();
+  cmd->callback([o] { run_survey(*o); });
+}
+
+}  // namespace semioctree::cli

@@ -1,0 +1,11 @@
+# Next-Best-View candidates, scores and the stop percentage (src/nbv.cpp).
+semioctree_add_test(test_nbv SOURCES test_nbv.cpp LIBS semioctree)
+target_include_directories(test_nbv PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+# The lab tests need the synthetic scanner for their input.
+if(TARGET semioctree_sim)
+  target_link_libraries(test_nbv PRIVATE semioctree_sim)
+  target_compile_definitions(test_nbv PRIVATE SEMIOCTREE_HAVE_SIM=1)
+  semioctree_add_bench(bench_nbv SOURCES bench_nbv.cpp LIBS semioctree semioctree_sim)
+  target_compile_definitions(bench_nbv PRIVATE SEMIOCTREE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+  target_include_directories(bench_nbv PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+endif()
