@@ -1,5 +1,6 @@
 #include "semioctree/discretize.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -38,6 +39,33 @@ class LeafKeySet {
   std::vector<std::uint64_t> slots_;
   unsigned shift_ = 64;
 };
+
+// 16-bit keys interleaved (x in bit 0): sorted, they follow OctoMap's
+// depth-first order.
+std::uint64_t spread(std::uint64_t v) {
+  v &= 0xffff;
+  v = (v | (v << 16)) & 0x0000ff0000ffull;
+  v = (v | (v << 8)) & 0x00f00f00f00full;
+  v = (v | (v << 4)) & 0x0c30c30c30c3ull;
+  v = (v | (v << 2)) & 0x249249249249ull;
+  return v;
+}
+std::uint64_t compact(std::uint64_t v) {
+  v &= 0x249249249249ull;
+  v = (v | (v >> 2)) & 0x0c30c30c30c3ull;
+  v = (v | (v >> 4)) & 0x00f00f00f00full;
+  v = (v | (v >> 8)) & 0x0000ff0000ffull;
+  v = (v | (v >> 16)) & 0xffff;
+  return v;
+}
+std::uint64_t morton(const octomap::OcTreeKey& k) {
+  return spread(k.k[0]) | (spread(k.k[1]) << 1) | (spread(k.k[2]) << 2);
+}
+octomap::OcTreeKey unmorton(std::uint64_t m) {
+  return octomap::OcTreeKey(static_cast<octomap::key_type>(compact(m)),
+                            static_cast<octomap::key_type>(compact(m >> 1)),
+                            static_cast<octomap::key_type>(compact(m >> 2)));
+}
 
 }  // namespace
 
@@ -97,20 +125,23 @@ std::size_t extend_coarse_grid(SemiOcTree& tree, const Cloud& cloud, double ceil
 std::size_t mark_occupied(SemiOcTree& tree, const Cloud& cloud, double ceiling_height) {
   // The leaf of every point is occupied; its ancestors are split on the way.
   // Points sharing a leaf are skipped through a hash set of leaf keys (a tree
-  // descent per point would cost more than the labelling itself).
+  // descent per point would cost more than the labelling itself), and the
+  // leaves are labelled in Morton (depth-first) order, so that successive
+  // descents share their path and find it in cache.
   const unsigned leaf = tree.coarse_level();
   LeafKeySet seen(cloud.size());
-  std::size_t marked = 0;
+  std::vector<std::uint64_t> order;
+  order.reserve(cloud.size());
   for (const auto& p : cloud) {
     if (p.z < 0 || p.z >= ceiling_height) continue;
     octomap::OcTreeKey key;
     if (!tree.key_of({p.x, p.y, p.z}, key)) continue;
-    if (!seen.insert(key)) continue;
     if (!tree.find_coarse(tree.coarse_index(key))) continue;  // outside the grid
-    tree.set_label(key, leaf, Label::kOccupied);
-    ++marked;
+    if (seen.insert(key)) order.push_back(morton(key));
   }
-  return marked;
+  std::sort(order.begin(), order.end());
+  for (std::uint64_t m : order) tree.set_label(unmorton(m), leaf, Label::kOccupied);
+  return order.size();
 }
 
 std::unique_ptr<SemiOcTree> discretize(const Cloud& cloud, double ceiling_height,
