@@ -132,7 +132,7 @@ void add_nbv_command(CLI::App& app) {
   cmd->add_option("--coarse", o->coarse, "coarse voxel size L = r*2^k, m")->capture_default_str();
   cmd->add_option("--stop", o->stop, "stop percentage threshold (Eq 5), %")->capture_default_str();
   cmd->add_option("--method", o->method,
-                  "NBV scoring: 1 = all levels weighted by volume, 2 = at the leaf level")
+                  "NBV scoring: 1 = all levels weighted by volume, 2 = one level (--level)")
       ->check(CLI::IsMember({1, 2}))
       ->capture_default_str();
   cmd->add_option("--level", o->level,

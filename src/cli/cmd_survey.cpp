@@ -280,7 +280,7 @@ void add_survey_command(CLI::App& app) {
   cmd->add_option("--stop", o->stop, "stop percentage threshold (Eq 5), %")->capture_default_str();
   cmd->add_option("--max-scans", o->max_scans, "scan budget")->capture_default_str();
   cmd->add_option("--method", o->method,
-                  "NBV scoring: 1 = all levels weighted by volume, 2 = at the leaf level")
+                  "NBV scoring: 1 = all levels weighted by volume, 2 = one level (--level)")
       ->check(CLI::IsMember({1, 2}))
       ->capture_default_str();
   cmd->add_option("--level", o->level,
