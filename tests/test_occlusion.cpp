@@ -10,34 +10,12 @@
 #include "semioctree/occlusion.h"
 #include "semioctree/openings.h"
 #include "semioctree/preprocess.h"
+#include "support/synthetic_clouds.h"
 
 namespace semioctree {
 namespace {
 
-// A 4 × 4 × 2.4 m room (walls only, as after preprocessing) with a
-// 0.6 × 0.6 × 1.6 m pillar at [2, 2.6) × [1.7, 2.3), as surface points.
-Cloud room_with_pillar(double step = 0.02) {
-  Cloud c;
-  auto add = [&](double x, double y, double z) {
-    c.push_back(pcl::PointXYZ{float(x), float(y), float(z)});
-  };
-  for (double z = step; z < 2.4; z += step) {
-    for (double t = 0; t <= 4.0; t += step) {
-      add(t, 0.01, z);
-      add(t, 3.99, z);
-      add(0.01, t, z);
-      add(3.99, t, z);
-    }
-    if (z < 1.6)
-      for (double t = 0; t < 0.6; t += step) {
-        add(2.0 + t, 1.7, z);
-        add(2.0 + t, 2.29, z);
-        add(2.0, 1.7 + t, z);
-        add(2.59, 1.7 + t, z);
-      }
-  }
-  return c;
-}
+using testing::room_with_pillar;
 
 // Does the segment a→b pass through the pillar's box (slab test)?
 bool hits_pillar(const Point3& a, const Point3& b) {

@@ -105,6 +105,17 @@ PreparedCloud prepare(const ScanSource& src, const std::string& command) {
   return prepare_clouds(src.input, src.pre);
 }
 
+void add_scanner_limit_options(CLI::App& cmd, ScannerView& limits) {
+  cmd.add_option("--max-range", limits.max_range, "scanner maximum range, m")
+      ->capture_default_str();
+  cmd.add_option("--min-range", limits.min_range, "scanner minimum range, m")
+      ->capture_default_str();
+  cmd.add_option("--elevation-min", limits.elevation_min_deg, "scanner lowest elevation, degrees")
+      ->capture_default_str();
+  cmd.add_option("--elevation-max", limits.elevation_max_deg, "scanner highest elevation, degrees")
+      ->capture_default_str();
+}
+
 std::string source_name(const ScanSource& src) {
   return std::filesystem::path(src.scene.empty() ? src.input.files.front() : src.scene)
       .filename()

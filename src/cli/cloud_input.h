@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "semioctree/occlusion.h"
 #include "semioctree/octomap_ext/semioctree.h"
 #include "semioctree/preprocess.h"
 
@@ -42,6 +43,8 @@ void add_scan_source_options(CLI::App& cmd, ScanSource& src, const std::string& 
 // Reads (or scans) and preprocesses; throws std::invalid_argument when neither
 // --cloud nor --scene was given.
 PreparedCloud prepare(const ScanSource& src, const std::string& command);
+// --max-range, --min-range, --elevation-min, --elevation-max.
+void add_scanner_limit_options(CLI::App& cmd, ScannerView& limits);
 // The title of a slice image: the input file's name.
 std::string source_name(const ScanSource& src);
 

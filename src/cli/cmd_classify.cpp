@@ -39,16 +39,7 @@ void add_classify_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--coarse", o->disc.coarse, "coarse voxel size L = r*2^k in metres")
       ->capture_default_str();
-  cmd->add_option("--max-range", o->limits.max_range, "scanner maximum range, m")
-      ->capture_default_str();
-  cmd->add_option("--min-range", o->limits.min_range, "scanner minimum range, m")
-      ->capture_default_str();
-  cmd->add_option("--elevation-min", o->limits.elevation_min_deg,
-                  "scanner lowest elevation, degrees")
-      ->capture_default_str();
-  cmd->add_option("--elevation-max", o->limits.elevation_max_deg,
-                  "scanner highest elevation, degrees")
-      ->capture_default_str();
+  add_scanner_limit_options(*cmd, o->limits);
   cmd->add_option("--out", o->out, "output directory")->required();
   cmd->add_option("--slice-height", o->slice_height,
                   "height of the slice image in metres above the floor (default: scanner height)");

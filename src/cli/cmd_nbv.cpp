@@ -7,6 +7,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "cloud_input.h"
 #include "commands.h"
 #include "semioctree/scan_io.h"
 #include "survey_session.h"
@@ -19,16 +20,10 @@ struct NbvOptions {
   std::vector<std::string> clouds;
   std::vector<std::string> poses;
   std::string out;
-  double leaf = 0.05, coarse = 0.8;
-  double stop = 0.1;
-  int method = 1;
-  int level = -1;  // method 2: the level scored (-1: the leaf)
+  PlanningOptions plan;
   double robot_radius = 0.5;
   double scanner_height = -1;  // < 0: the first scan's optical centre above the floor
-  std::size_t target_points = 400000;
-  double candidate_spacing = 0.5;
   ScannerView limits;
-  unsigned threads = 0;
 };
 
 void run_nbv(const NbvOptions& o) {
@@ -37,7 +32,11 @@ void run_nbv(const NbvOptions& o) {
     throw std::invalid_argument("give one --pose per --cloud file (" +
                                 std::to_string(o.clouds.size()) + " files, " +
                                 std::to_string(o.poses.size()) + " poses)");
-  SemiOcTree::coarse_level_for(o.leaf, o.coarse);
+  SessionParams p;
+  p.out = o.out;
+  p.map.limits = o.limits;
+  apply_planning_options(o.plan, p);
+  p.robot.radius = o.robot_radius;
   // Read everything first: a bad file fails before any work is done.
   std::vector<Scan> scans;
   for (std::size_t i = 0; i < o.clouds.size(); ++i) {
@@ -50,19 +49,6 @@ void run_nbv(const NbvOptions& o) {
   }
   const bool posed =
       !o.poses.empty() || scans.size() == 1 || o.clouds.size() == 1;  // PTX files carry their poses
-  SessionParams p;
-  p.out = o.out;
-  p.map.grid = {o.leaf, o.coarse, 0.0};
-  p.map.limits = o.limits;
-  p.map.threads = o.threads;
-  p.preprocess.target_points = o.target_points;
-  p.nbv.method = o.method;
-  if (o.level >= 0) p.nbv.level = unsigned(o.level);
-  p.nbv.candidate_spacing = o.candidate_spacing;
-  p.nbv.threads = o.threads;
-  p.nbv.limits = o.limits;
-  p.robot.radius = o.robot_radius;
-  p.stop_percent = o.stop;
   std::unique_ptr<SurveySession> session;
   ScanOutcome last;
   for (std::size_t i = 0; i < scans.size(); ++i) {
@@ -91,7 +77,7 @@ void run_nbv(const NbvOptions& o) {
   std::string why = "stop_percentage";
   if (!last.nbv)
     why = "no_candidate";
-  else if (last.stop_percent >= o.stop)
+  else if (last.stop_percent >= o.plan.stop)
     why = "max_scans";  // the scans given are all there is; more are needed
   nlohmann::json extra;
   extra["inputs"] = o.clouds;
@@ -103,8 +89,8 @@ void run_nbv(const NbvOptions& o) {
         "next best view: (%.2f, %.2f, %.2f), score %.1f; stop percentage %.3f %% (%s %.3f "
         "%%)\n",
         last.nbv->position.x, last.nbv->position.y, last.nbv->position.z, last.nbv->score,
-        last.stop_percent, last.stop_percent < o.stop ? "below the threshold" : "threshold",
-        o.stop);
+        last.stop_percent, last.stop_percent < o.plan.stop ? "below the threshold" : "threshold",
+        o.plan.stop);
   else
     std::printf("no feasible next best view\n");
   std::printf("wrote %s/survey.json and scan_NN/\n", o.out.c_str());
@@ -128,39 +114,12 @@ void add_nbv_command(CLI::App& app) {
                   "scanner pose X,Y,Z[,YAW_DEG] of each --cloud in the survey frame (default: "
                   "the first at the origin, the others registered by ICP; PTX files carry theirs)");
   cmd->add_option("--out", o->out, "output directory")->required();
-  cmd->add_option("--leaf", o->leaf, "leaf (finest octant) size r, m")->capture_default_str();
-  cmd->add_option("--coarse", o->coarse, "coarse voxel size L = r*2^k, m")->capture_default_str();
-  cmd->add_option("--stop", o->stop, "stop percentage threshold (Eq 5), %")->capture_default_str();
-  cmd->add_option("--method", o->method,
-                  "NBV scoring: 1 = all levels weighted by volume, 2 = one level (--level)")
-      ->check(CLI::IsMember({1, 2}))
-      ->capture_default_str();
-  cmd->add_option("--level", o->level,
-                  "method 2: the octree level scored, 0 = coarse voxels ... k = leaf (default: the "
-                  "leaf)")
-      ->check(CLI::NonNegativeNumber);
+  add_planning_options(*cmd, o->plan);
   cmd->add_option("--robot-radius", o->robot_radius, "safety cylinder radius, m")
       ->capture_default_str();
   cmd->add_option("--scanner-height", o->scanner_height,
                   "scanner optical centre above the floor, m (default: from the first scan)");
-  cmd->add_option("--target-points", o->target_points,
-                  "decimate each scan to about this many points")
-      ->capture_default_str();
-  cmd->add_option("--candidate-spacing", o->candidate_spacing,
-                  "spacing of the NBV candidate grid, m")
-      ->capture_default_str();
-  cmd->add_option("--max-range", o->limits.max_range, "scanner maximum range, m")
-      ->capture_default_str();
-  cmd->add_option("--min-range", o->limits.min_range, "scanner minimum range, m")
-      ->capture_default_str();
-  cmd->add_option("--elevation-min", o->limits.elevation_min_deg,
-                  "scanner lowest elevation, degrees")
-      ->capture_default_str();
-  cmd->add_option("--elevation-max", o->limits.elevation_max_deg,
-                  "scanner highest elevation, degrees")
-      ->capture_default_str();
-  cmd->add_option("--threads", o->threads, "worker threads (0: one per core)")
-      ->capture_default_str();
+  add_scanner_limit_options(*cmd, o->limits);
   cmd->callback([o] { run_nbv(*o); });
 }
 

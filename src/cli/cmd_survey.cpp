@@ -28,20 +28,14 @@ namespace {
 struct SurveyOptions {
   std::string scene;
   std::string out;
-  double leaf = 0.05, coarse = 0.8;
-  double stop = 0.1;
+  PlanningOptions plan;
   int max_scans = 10;
-  int method = 1;
-  int level = -1;  // method 2: the level scored (-1: the leaf)
   bool homogeneous = false;
   std::uint64_t seed = 1;
-  std::size_t target_points = 400000;
-  double candidate_spacing = 0.5;
   std::string policy = "nbv";  // or "random": a random feasible candidate (the baseline)
   std::vector<double> start;   // X,Y: replaces the scene's robot start
   std::string cache;
   bool coverage = true;
-  unsigned threads = 0;
 };
 
 double since(std::chrono::steady_clock::time_point t0) {
@@ -57,8 +51,6 @@ void run_survey(const SurveyOptions& o) {
   if (o.max_scans < 1)
     throw std::invalid_argument("--max-scans must be at least 1 (got " +
                                 std::to_string(o.max_scans) + ")");
-  if (!(o.stop >= 0)) throw std::invalid_argument("--stop must be a percentage ≥ 0");
-  SemiOcTree::coarse_level_for(o.leaf, o.coarse);  // L = r·2^k, or a clear error
 
   std::optional<Eigen::Vector2d> start_override;
   if (!o.start.empty()) {
@@ -91,23 +83,17 @@ void run_survey(const SurveyOptions& o) {
 
   SessionParams p;
   p.out = o.out;
-  p.map.grid = {o.leaf, o.homogeneous ? o.leaf : o.coarse, o.homogeneous ? o.coarse : 0.0};
-  p.map.threads = o.threads;
   p.map.limits.min_range = scene.scanner.min_range;
   p.map.limits.max_range = scene.scanner.max_range;
   p.map.limits.elevation_min_deg = scene.scanner.elevation_min_deg;
   p.map.limits.elevation_max_deg = scene.scanner.elevation_max_deg;
-  p.preprocess.target_points = o.target_points;
-  p.nbv.method = o.method;
-  if (o.level >= 0) p.nbv.level = unsigned(o.level);
-  p.nbv.candidate_spacing = o.candidate_spacing;
-  p.nbv.threads = o.threads;
-  p.nbv.limits = p.map.limits;
+  apply_planning_options(o.plan, p);
+  if (o.homogeneous) p.map.grid = {o.plan.leaf, o.plan.leaf, o.plan.coarse};
   p.robot.radius = scene.robot.radius;
   p.robot.scanner_height = scene.scanner.height;
-  p.stop_percent = o.stop;
   if (o.homogeneous)
-    std::printf("homogeneous grid of %.3f m voxels (the baseline): expect it to be slow\n", o.leaf);
+    std::printf("homogeneous grid of %.3f m voxels (the baseline): expect it to be slow\n",
+                o.plan.leaf);
   std::filesystem::create_directories(o.out);
 
   const auto caster = sim::make_ray_caster(sim::tessellate(scene));
@@ -125,7 +111,7 @@ void run_survey(const SurveyOptions& o) {
     const auto t0 = std::chrono::steady_clock::now();
     sim::ScanOptions so;
     so.seed = o.seed * 1000 + std::uint64_t(i);
-    so.threads = o.threads;
+    so.threads = o.plan.threads;
     so.with_intensity = false;
     const sim::Scan s = sim::scan(*caster, scene.scanner, robot.true_pose(), so);
     const double scan_seconds = since(t0);
@@ -207,9 +193,9 @@ void run_survey(const SurveyOptions& o) {
       std::printf("stop: no feasible candidate remains\n");
       break;
     }
-    if (r.stop_percent < o.stop) {
+    if (r.stop_percent < o.plan.stop) {
       stopped_because = "stop_percentage";
-      std::printf("stop: stop percentage %.3f %% < %.3f %%\n", r.stop_percent, o.stop);
+      std::printf("stop: stop percentage %.3f %% < %.3f %%\n", r.stop_percent, o.plan.stop);
       break;
     }
     if (i + 1 == o.max_scans) {
@@ -275,28 +261,12 @@ void add_survey_command(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "output directory")->required();
-  cmd->add_option("--leaf", o->leaf, "leaf (finest octant) size r, m")->capture_default_str();
-  cmd->add_option("--coarse", o->coarse, "coarse voxel size L = r*2^k, m")->capture_default_str();
-  cmd->add_option("--stop", o->stop, "stop percentage threshold (Eq 5), %")->capture_default_str();
+  add_planning_options(*cmd, o->plan);
   cmd->add_option("--max-scans", o->max_scans, "scan budget")->capture_default_str();
-  cmd->add_option("--method", o->method,
-                  "NBV scoring: 1 = all levels weighted by volume, 2 = one level (--level)")
-      ->check(CLI::IsMember({1, 2}))
-      ->capture_default_str();
-  cmd->add_option("--level", o->level,
-                  "method 2: the octree level scored, 0 = coarse voxels ... k = leaf (default: the "
-                  "leaf)")
-      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--homogeneous", o->homogeneous,
                 "use the homogeneous grid of leaf-size voxels (the paper's baseline) instead of "
                 "the semioctree");
   cmd->add_option("--seed", o->seed, "seed of the scanner noise and the odometry drift")
-      ->capture_default_str();
-  cmd->add_option("--target-points", o->target_points,
-                  "decimate each scan to about this many points (paper: 400 000)")
-      ->capture_default_str();
-  cmd->add_option("--candidate-spacing", o->candidate_spacing,
-                  "spacing of the NBV candidate grid at scanner height, m")
       ->capture_default_str();
   cmd->add_option("--policy", o->policy,
                   "where to scan next: nbv (the best candidate) or random (a random feasible "
@@ -311,8 +281,6 @@ void add_survey_command(CLI::App& app) {
                   "or ~/.cache/semioctree)");
   cmd->add_flag("!--no-coverage", o->coverage,
                 "skip the coverage of the scene's surfaces in survey.json");
-  cmd->add_option("--threads", o->threads, "worker threads (0: one per core)")
-      ->capture_default_str();
   cmd->callback([o] { run_survey(*o); });
 }
 

@@ -47,6 +47,41 @@ json pose_json(const Eigen::Isometry3d& p) {
   return {{"x", t.x()}, {"y", t.y()}, {"z", t.z()}, {"yaw_deg", yaw_deg_of(p)}};
 }
 
+void add_planning_options(CLI::App& cmd, PlanningOptions& o) {
+  cmd.add_option("--leaf", o.leaf, "leaf (finest octant) size r, m")->capture_default_str();
+  cmd.add_option("--coarse", o.coarse, "coarse voxel size L = r*2^k, m")->capture_default_str();
+  cmd.add_option("--stop", o.stop, "stop percentage threshold (Eq 5), %")->capture_default_str();
+  cmd.add_option("--method", o.method,
+                 "NBV scoring: 1 = all levels weighted by volume, 2 = one level (--level)")
+      ->check(CLI::IsMember({1, 2}))
+      ->capture_default_str();
+  cmd.add_option("--level", o.level,
+                 "method 2: the octree level scored, 0 = coarse voxels ... k = leaf (default: the "
+                 "leaf)")
+      ->check(CLI::NonNegativeNumber);
+  cmd.add_option("--candidate-spacing", o.candidate_spacing,
+                 "spacing of the NBV candidate grid at scanner height, m")
+      ->capture_default_str();
+  cmd.add_option("--target-points", o.target_points,
+                 "decimate each scan to about this many points (paper: 400 000)")
+      ->capture_default_str();
+  cmd.add_option("--threads", o.threads, "worker threads (0: one per core)")->capture_default_str();
+}
+
+void apply_planning_options(const PlanningOptions& o, SessionParams& p) {
+  if (!(o.stop >= 0)) throw std::invalid_argument("--stop must be a percentage ≥ 0");
+  SemiOcTree::coarse_level_for(o.leaf, o.coarse);  // L = r·2^k, or a clear error
+  p.map.grid = {o.leaf, o.coarse, 0.0};
+  p.map.threads = o.threads;
+  p.preprocess.target_points = o.target_points;
+  p.nbv.method = o.method;
+  if (o.level >= 0) p.nbv.level = unsigned(o.level);
+  p.nbv.candidate_spacing = o.candidate_spacing;
+  p.nbv.threads = o.threads;
+  p.nbv.limits = p.map.limits;
+  p.stop_percent = o.stop;
+}
+
 SurveySession::SurveySession(const SessionParams& params) : params_(params), map_(params.map) {}
 
 ScanOutcome SurveySession::add_scan(const IncomingScan& in,

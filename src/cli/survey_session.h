@@ -4,6 +4,7 @@
 // and the survey.json record (DESIGN.md "Outputs of a survey").
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -24,6 +25,22 @@ struct SessionParams {
   double stop_percent = 0.1;
   std::string out;
 };
+
+// The options `survey` and `nbv` share: the grid, the NBV, the stop
+// threshold, decimation and threads.
+struct PlanningOptions {
+  double leaf = 0.05, coarse = 0.8;
+  double stop = 0.1;
+  int method = 1;
+  int level = -1;  // method 2: the level scored (-1: the leaf)
+  double candidate_spacing = 0.5;
+  std::size_t target_points = 400000;
+  unsigned threads = 0;
+};
+void add_planning_options(CLI::App& cmd, PlanningOptions& o);
+// Fills `p` from them (the grid is the semioctree; the scanner limits are
+// set by the caller and copied to the NBV).
+void apply_planning_options(const PlanningOptions& o, SessionParams& p);
 
 // One scan as it comes in: points in the scanner frame and the pose the
 // scanner's platform reports (odometry, or the pose a user gave).
