@@ -7,38 +7,11 @@
 #include <stdexcept>
 #include <vector>
 
+#include "packed_key_index.h"
+
 namespace semioctree {
 
 namespace {
-
-// Open-addressing set of leaf keys, sized for `expected` insertions.
-class LeafKeySet {
- public:
-  explicit LeafKeySet(std::size_t expected) {
-    std::size_t capacity = 1024;
-    while (capacity < 2 * expected) capacity *= 2;
-    slots_.assign(capacity, kEmpty);
-    shift_ = 64 - unsigned(__builtin_ctzll(capacity));
-  }
-  // False when the key was already there.
-  bool insert(const octomap::OcTreeKey& k) {
-    const std::uint64_t v =
-        (std::uint64_t(k.k[0]) << 32) | (std::uint64_t(k.k[1]) << 16) | std::uint64_t(k.k[2]);
-    for (std::size_t i = std::size_t((v * 0x9E3779B97F4A7C15ull) >> shift_);;
-         i = (i + 1) & (slots_.size() - 1)) {
-      if (slots_[i] == v) return false;
-      if (slots_[i] == kEmpty) {
-        slots_[i] = v;
-        return true;
-      }
-    }
-  }
-
- private:
-  static constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
-  std::vector<std::uint64_t> slots_;
-  unsigned shift_ = 64;
-};
 
 // 16-bit keys interleaved (x in bit 0): sorted, they follow OctoMap's
 // depth-first order.
@@ -129,7 +102,7 @@ std::size_t mark_occupied(SemiOcTree& tree, const Cloud& cloud, double ceiling_h
   // leaves are labelled in Morton (depth-first) order, so that successive
   // descents share their path and find it in cache.
   const unsigned leaf = tree.coarse_level();
-  LeafKeySet seen(cloud.size());
+  detail::PackedKeyIndex seen(cloud.size());
   std::vector<std::uint64_t> order;
   order.reserve(cloud.size());
   for (const auto& p : cloud) {
@@ -137,7 +110,8 @@ std::size_t mark_occupied(SemiOcTree& tree, const Cloud& cloud, double ceiling_h
     octomap::OcTreeKey key;
     if (!tree.key_of({p.x, p.y, p.z}, key)) continue;
     if (!tree.find_coarse(tree.coarse_index(key))) continue;  // outside the grid
-    if (seen.insert(key)) order.push_back(morton(key));
+    const std::uint64_t m = morton(key);
+    if (seen.insert(m)) order.push_back(m);
   }
   std::sort(order.begin(), order.end());
   for (std::uint64_t m : order) tree.set_label(unmorton(m), leaf, Label::kOccupied);

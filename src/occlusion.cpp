@@ -2,11 +2,10 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <ctime>
 #include <thread>
+
+#include "packed_key_index.h"
 
 namespace semioctree {
 
@@ -140,50 +139,6 @@ int samples_of(const Candidate& c, unsigned coarse_level, LatticePoint out[9]) {
   return 9;
 }
 
-// Open-addressing map lattice point → sample id (index into the study's
-// visibility array), filled serially, each point once.
-class SampleIndex {
- public:
-  // The id of `p`; `next_id` when new (then inserted with that id).
-  std::uint32_t find_or_add(LatticePoint p, std::uint32_t next_id) {
-    if (4 * (size_ + 1) > 3 * keys_.size()) grow();
-    std::size_t i = slot_of(p);
-    while (keys_[i] != kEmptyKey) {
-      if (keys_[i] == p) return ids_[i];
-      i = (i + 1) & (keys_.size() - 1);
-    }
-    keys_[i] = p;
-    ids_[i] = next_id;
-    ++size_;
-    return next_id;
-  }
-
-  void prefetch(LatticePoint p) const {
-    if (!keys_.empty()) __builtin_prefetch(&keys_[slot_of(p)]);
-  }
-
- private:
-  static constexpr LatticePoint kEmptyKey = ~LatticePoint(0);
-  std::size_t slot_of(LatticePoint p) const {
-    return std::size_t((p * 0x9E3779B97F4A7C15ull) >> shift_);  // Fibonacci hashing
-  }
-  void grow() {
-    std::vector<LatticePoint> keys = std::move(keys_);
-    std::vector<std::uint32_t> ids = std::move(ids_);
-    const std::size_t capacity = std::max<std::size_t>(1024, 2 * keys.size());
-    keys_.assign(capacity, kEmptyKey);
-    ids_.assign(capacity, 0);
-    shift_ = 64 - unsigned(__builtin_ctzll(capacity));
-    size_ = 0;
-    for (std::size_t i = 0; i < keys.size(); ++i)
-      if (keys[i] != kEmptyKey) find_or_add(keys[i], ids[i]);
-  }
-  std::vector<LatticePoint> keys_;
-  std::vector<std::uint32_t> ids_;
-  unsigned shift_ = 64;
-  std::size_t size_ = 0;
-};
-
 // Runs f(i) for i in [0, n) on `threads` threads, in chunks.
 template <typename F>
 void parallel_for(std::size_t n, unsigned threads, F&& f) {
@@ -232,7 +187,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
                                : std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
   const unsigned leaf = tree.coarse_level();
   const double leaf_size = tree.leaf_size();
-  SampleIndex index;
+  detail::PackedKeyIndex index;          // lattice point → sample id
   std::vector<LatticePoint> points;      // by sample id
   std::vector<std::uint8_t> visibility;  // by sample id
   std::vector<std::uint32_t> samples;    // ids of each candidate's samples, 9 per candidate

@@ -16,6 +16,8 @@
 #include <sstream>
 #include <vector>
 
+#include "packed_key_index.h"
+
 namespace semioctree {
 
 namespace {
@@ -146,28 +148,13 @@ namespace {
 // Number of cells of side `spacing` holding a point: the size UniformSampling
 // would give, without building its output.
 std::size_t count_cells(const Cloud& cloud, double spacing) {
-  std::size_t capacity = 1024;
-  while (capacity < 2 * cloud.size()) capacity *= 2;
-  std::vector<std::uint64_t> slots(capacity, ~std::uint64_t(0));
-  const unsigned shift = 64 - unsigned(__builtin_ctzll(capacity));
+  detail::PackedKeyIndex cells(cloud.size());
   const double inv = 1.0 / spacing;
-  std::size_t n = 0;
-  for (const auto& q : cloud) {
-    auto cell = [inv](float v) {
-      return std::uint64_t(std::int64_t(std::floor(double(v) * inv)) & 0x1fffff);
-    };
-    const std::uint64_t key = (cell(q.x) << 42) | (cell(q.y) << 21) | cell(q.z);
-    for (std::size_t i = std::size_t((key * 0x9E3779B97F4A7C15ull) >> shift);;
-         i = (i + 1) & (capacity - 1)) {
-      if (slots[i] == key) break;
-      if (slots[i] == ~std::uint64_t(0)) {
-        slots[i] = key;
-        ++n;
-        break;
-      }
-    }
-  }
-  return n;
+  auto cell = [inv](float v) {
+    return std::uint64_t(std::int64_t(std::floor(double(v) * inv)) & 0x1fffff);
+  };
+  for (const auto& q : cloud) cells.insert((cell(q.x) << 42) | (cell(q.y) << 21) | cell(q.z));
+  return cells.size();
 }
 
 }  // namespace
