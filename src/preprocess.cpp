@@ -2,7 +2,6 @@
 
 #include <pcl/common/centroid.h>
 #include <pcl/common/transforms.h>
-#include <pcl/filters/extract_indices.h>
 #include <pcl/filters/uniform_sampling.h>
 #include <pcl/sample_consensus/method_types.h>
 #include <pcl/sample_consensus/model_types.h>
@@ -31,8 +30,7 @@ struct HorizontalPlane {
   }
 };
 
-// Horizontal planes by RANSAC on a random subset, largest first; each plane's
-// inliers are removed before looking for the next.
+// Horizontal planes on a random subset, largest first.
 std::vector<HorizontalPlane> find_horizontal_planes(const Cloud& input, const PreprocessParams& p) {
   Cloud::Ptr work(new Cloud);
   if (input.size() > p.ransac_sample) {
@@ -56,34 +54,65 @@ std::vector<HorizontalPlane> find_horizontal_planes(const Cloud& input, const Pr
   seg.setMaxIterations(p.ransac_iterations);
 
   std::vector<HorizontalPlane> planes;
-  const std::size_t min_inliers = std::size_t(p.min_plane_fraction * double(work->size()));
-  for (int round = 0; round < 8 && work->size() > 100; ++round) {
-    pcl::PointIndices::Ptr inliers(new pcl::PointIndices);
-    pcl::ModelCoefficients coeffs;
-    seg.setInputCloud(work);
-    seg.segment(*inliers, coeffs);
-    if (inliers->indices.size() < std::max<std::size_t>(min_inliers, 50) ||
-        coeffs.values.size() != 4)
-      break;
-    HorizontalPlane plane;
-    plane.normal = Eigen::Vector3d(coeffs.values[0], coeffs.values[1], coeffs.values[2]);
-    plane.d = coeffs.values[3];
-    const double len = plane.normal.norm();
-    plane.normal /= len;
-    plane.d /= len;
-    if (plane.normal.z() < 0) {
-      plane.normal = -plane.normal;
-      plane.d = -plane.d;
+  const std::size_t min_inliers =
+      std::max<std::size_t>(std::size_t(p.min_plane_fraction * double(work->size())), 50);
+  pcl::PointIndices::Ptr inliers(new pcl::PointIndices);
+  pcl::ModelCoefficients coeffs;
+  seg.setInputCloud(work);
+  seg.segment(*inliers, coeffs);
+  if (inliers->indices.size() < min_inliers || coeffs.values.size() != 4) return planes;
+  HorizontalPlane first;
+  first.normal = Eigen::Vector3d(coeffs.values[0], coeffs.values[1], coeffs.values[2]);
+  first.d = coeffs.values[3];
+  const double len = first.normal.norm();
+  first.normal /= len;
+  first.d /= len;
+  if (first.normal.z() < 0) {
+    first.normal = -first.normal;
+    first.d = -first.d;
+  }
+  first.inliers = std::size_t(double(inliers->indices.size()) * scale);
+  planes.push_back(first);
+
+  // The other planes are parallel to the first (floor and ceiling of one room):
+  // peaks of the points' heights along its normal, largest first. A second
+  // RANSAC over all tilts would instead find planes tilted by ~10° cutting two
+  // near walls along dense bands before the floor in a scan taken in a corner
+  // (whose floor nearby lies in the blind zone).
+  std::vector<double> h(work->size());
+  for (std::size_t i = 0; i < work->size(); ++i) {
+    const auto& q = (*work)[i];
+    h[i] = first.normal.dot(Eigen::Vector3d(q.x, q.y, q.z));
+  }
+  std::sort(h.begin(), h.end());
+  const double w = p.ransac_distance;
+  auto within = [&](double c) {  // points within ±w of height c
+    return std::size_t(std::upper_bound(h.begin(), h.end(), c + w) -
+                       std::lower_bound(h.begin(), h.end(), c - w));
+  };
+  auto mean_within = [&](double c) {
+    const auto lo = std::lower_bound(h.begin(), h.end(), c - w);
+    const auto hi = std::upper_bound(h.begin(), h.end(), c + w);
+    return lo == hi ? c : std::accumulate(lo, hi, 0.0) / double(hi - lo);
+  };
+  std::vector<double> taken{-first.d};
+  while (planes.size() < 8) {
+    double best_c = 0;
+    std::size_t best_n = 0;
+    for (double c = h.front(); c <= h.back(); c += 0.5 * w) {
+      bool near_taken = false;
+      for (double t : taken) near_taken |= std::fabs(c - t) < p.peak_window;
+      if (near_taken) continue;
+      const std::size_t n = within(c);
+      if (n > best_n) best_n = n, best_c = c;
     }
-    plane.inliers = std::size_t(double(inliers->indices.size()) * scale);
+    if (best_n < min_inliers) break;
+    const double c = mean_within(mean_within(best_c));
+    taken.push_back(c);
+    HorizontalPlane plane = first;
+    plane.d = -c;
+    plane.inliers = std::size_t(double(within(c)) * scale);
     planes.push_back(plane);
-    pcl::ExtractIndices<pcl::PointXYZ> extract;
-    extract.setInputCloud(work);
-    extract.setIndices(inliers);
-    extract.setNegative(true);
-    Cloud::Ptr rest(new Cloud);
-    extract.filter(*rest);
-    work = rest;
   }
   return planes;
 }
@@ -267,19 +296,27 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     // log(spacing) (≈ −2 for surfaces), then filter once with PCL. Aim 1 %
     // under the target; accept 3 % under to exactly at it.
     const double goal = 0.99 * double(p.target_points);
+    const double target = double(p.target_points);
     double s0 = std::max(spacing, 0.01), c0 = double(count_cells(*cut, s0));
     double s1 = std::max(spacing, s0 * std::sqrt(c0 / goal));
+    // The finest spacing tried that keeps at most the target: on regular
+    // (synthetic) grids the count jumps with the cells' phase and the secant
+    // may not settle, so the result is always a spacing that was counted.
+    double best = c0 <= target ? s0 : 0, best_count = c0 <= target ? c0 : 0;
     for (int it = 0; it < 12; ++it) {
       const double c1 = double(count_cells(*cut, s1));
-      if (c1 <= double(p.target_points) && c1 >= 0.97 * double(p.target_points)) break;
+      if (c1 <= target && c1 > best_count) best = s1, best_count = c1;
+      if (c1 <= target && c1 >= 0.97 * target) break;
       double slope = (std::log(c1) - std::log(c0)) / (std::log(s1) - std::log(s0));
       if (!std::isfinite(slope) || slope > -0.5) slope = -2.0;  // flat or noisy: surfaces
       s0 = s1;
       c0 = c1;
       s1 = std::max(spacing, std::exp(std::log(s1) + (std::log(goal) - std::log(c1)) / slope));
-      if (c1 > double(p.target_points) && s1 <= s0) s1 = s0 * 1.01;  // must get coarser
+      if (c1 > target && s1 <= s0) s1 = s0 * 1.01;  // must get coarser
     }
-    spacing = s1;
+    for (double s = std::max(s1, s0); best == 0; s *= 1.05)  // none small enough yet
+      if (double(count_cells(*cut, s)) <= target) best = s;
+    spacing = best;
   }
   if (!decimated) decimated = spacing > 0 ? decimate(*cut, spacing) : cut;
   r.cloud = decimated;

@@ -42,5 +42,25 @@ TEST(LabDiscretization, SemioctreeNeedsFarFewerOctants) {
       static_cast<unsigned long long>(homo.back().stats.total()), ratio, avg);
 }
 
+// Near two walls the floor's near part lies in the blind zone and the walls are
+// dense: planes tilted by ~10° cutting both walls along bands used to outnumber
+// the floor (a survey scan in a corner was levelled 6° off). Floor and ceiling
+// are now searched parallel to the largest horizontal plane.
+TEST(LabDiscretization, ScansInTheCornersAreLevelled) {
+  for (const auto& [x, y] : {std::pair{0.77, 0.78}, std::pair{9.77, 0.78}, std::pair{1.27, 7.78},
+                             std::pair{9.27, 7.28}}) {
+    for (double yaw : {0.0, 35.0}) {
+      const testing::LabScan lab = testing::scan_lab(3, sim::Pose2{x, y, yaw});
+      PreprocessParams pp;
+      pp.target_points = 400000;
+      SCOPED_TRACE(::testing::Message() << "at " << x << ", " << y << ", yaw " << yaw);
+      const PreprocessResult pre = preprocess(lab.world, pp);
+      EXPECT_NEAR(pre.alpha_deg, 0.0, 0.1);
+      EXPECT_NEAR(pre.beta_deg, 0.0, 0.1);
+      EXPECT_NEAR(pre.ceiling_height, 3.2, 0.02);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace semioctree

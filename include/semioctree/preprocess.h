@@ -1,6 +1,7 @@
 // Stage 1 (paper 2.1): level the cloud and cut floor and ceiling out of it.
-// RANSAC finds the floor and ceiling planes (planes whose normal is within a
-// few degrees of z), the rotation of Eq 1-2 levels them, a translation puts
+// RANSAC finds the largest horizontal plane (normal within max_tilt_deg of z),
+// the other horizontal planes are the peaks of the heights along its normal
+// (floor and ceiling are parallel); the rotation of Eq 1-2 levels them, a translation puts
 // the floor at z = 0; a Gaussian fitted to the floor and the ceiling peaks of
 // the z histogram gives σ, and points within 2σ of either are removed (they
 // carry no information for the NBV). Finally the cloud is decimated to a

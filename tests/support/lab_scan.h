@@ -1,8 +1,9 @@
-// One synthetic scan of the built-in lab scene from the robot's start, in the
-// world frame: the input of the lab tests and benchmarks.
+// One synthetic scan of the built-in lab scene from the robot's start (or a
+// given pose), in the world frame: the input of the lab tests and benchmarks.
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "semioctree/scan_io.h"
@@ -19,14 +20,15 @@ struct LabScan {
   std::size_t rays = 0;
 };
 
-inline LabScan scan_lab(std::uint64_t seed = 1) {
+inline LabScan scan_lab(std::uint64_t seed = 1, const std::optional<sim::Pose2>& pose = {}) {
   const sim::Scene scene =
       sim::load_scene(std::string(SEMIOCTREE_SOURCE_DIR) + "/sim/scenes/lab.scene.json");
   const auto caster = sim::make_ray_caster(sim::tessellate(scene));
   sim::ScanOptions options;
   options.seed = seed;
-  const sim::Scan s = sim::scan(*caster, scene.scanner,
-                                {scene.robot.start.x(), scene.robot.start.y(), 0.0}, options);
+  const sim::Scan s = sim::scan(
+      *caster, scene.scanner,
+      pose.value_or(sim::Pose2{scene.robot.start.x(), scene.robot.start.y(), 0.0}), options);
   LabScan out;
   const Eigen::Isometry3d to_world = s.sensor_to_world();
   for (const auto& p : s.points) {
