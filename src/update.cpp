@@ -1,6 +1,8 @@
 #include "semioctree/update.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "semioctree/preprocess.h"
 
@@ -11,6 +13,29 @@ double since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 }  // namespace
+
+Cloud::Ptr within_limits(const Cloud& scan, const ScannerView& limits, std::size_t* dropped) {
+  // Coordinates are floats: a return on a limit itself (the synthetic
+  // scanner's lowest beam row) must survive the rounding.
+  constexpr double kRangeTolerance = 1e-4, kElevationTolerance = 1e-3;  // m, degrees
+  Cloud::Ptr out(new Cloud);
+  out->reserve(scan.size());
+  for (const auto& p : scan) {
+    const double x = p.x, y = p.y, z = p.z;
+    const double range = std::sqrt(x * x + y * y + z * z);
+    if (range < limits.min_range - kRangeTolerance || range > limits.max_range + kRangeTolerance)
+      continue;
+    if (range > 0) {
+      const double elevation = std::asin(std::clamp(z / range, -1.0, 1.0)) * 180.0 / M_PI;
+      if (elevation < limits.elevation_min_deg - kElevationTolerance ||
+          elevation > limits.elevation_max_deg + kElevationTolerance)
+        continue;
+    }
+    out->push_back(p);
+  }
+  if (dropped) *dropped = scan.size() - out->size();
+  return out;
+}
 
 SurveyMap::SurveyMap(const SurveyMapParams& params) : params_(params), merged_(new Cloud) {
   SemiOcTree::coarse_level_for(params.grid.leaf, params.grid.coarse);  // validates

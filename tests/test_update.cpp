@@ -1,6 +1,7 @@
 // Stage 8: a map refined scan by scan against one built from scratch.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <map>
 
 #include "semioctree/update.h"
@@ -108,6 +109,29 @@ TEST(Update, PointsAboveTheFirstCeilingAreLeftOut) {
   octomap::OcTreeKey k;
   ASSERT_TRUE(map.tree().key_of({1.0, 1.0, 2.9}, k));
   EXPECT_EQ(map.tree().find_coarse(map.tree().coarse_index(k)), nullptr);
+}
+
+// A real scan's returns from the scanner's mount and the robot's body lie
+// closer than the minimum range or below the lowest elevation: not mapped.
+TEST(Update, ReturnsOutsideTheScannerLimitsAreDropped) {
+  ScannerView v;  // 0.6 to 60 m, -60° to 90°
+  const double s60 = std::sin(60 * M_PI / 180), c60 = std::cos(60 * M_PI / 180);
+  Cloud scan;
+  add(scan, 0.05, 0.0, -0.11);        // the mount, 0.12 m away
+  add(scan, 0.3, 0.0, -0.8);          // the robot's body, -69°
+  add(scan, 3.0, 0.0, -1.2);          // the floor, -22°
+  add(scan, 0.0, 2.0, 0.0);           // a wall
+  add(scan, 70.0, 0.0, 0.0);          // beyond the maximum range
+  add(scan, 2 * c60, 0.0, -2 * s60);  // on the lowest elevation: kept
+  add(scan, 0.0, 0.6, 0.0);           // at the minimum range: kept
+  std::size_t dropped = 0;
+  const Cloud::Ptr kept = within_limits(scan, v, &dropped);
+  EXPECT_EQ(dropped, 3u);
+  ASSERT_EQ(kept->size(), 4u);
+  EXPECT_FLOAT_EQ((*kept)[0].x, 3.0f);
+  EXPECT_FLOAT_EQ((*kept)[1].y, 2.0f);
+  v.elevation_min_deg = -41;  // a robot whose body reaches -41.4°
+  EXPECT_EQ(within_limits(scan, v)->size(), 3u);
 }
 
 }  // namespace

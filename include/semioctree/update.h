@@ -39,6 +39,16 @@ struct ScanUpdateReport {
   double seconds_occupancy = 0, seconds_openings = 0, seconds_occlusion = 0;
 };
 
+// The returns of one scan (points in the scanner's own frame, optical centre
+// at the origin) that lie within the scanner's range and elevation limits;
+// `dropped` counts the others. A real scanner also records its own mount and
+// the robot's body (closer than the minimum range, below the lowest elevation
+// that clears the robot). The occlusion study takes that space as unseen;
+// mapped, such returns would be occupied leaves in the robot's own cylinder,
+// and their shadows occluded space all around it.
+Cloud::Ptr within_limits(const Cloud& scan, const ScannerView& limits,
+                         std::size_t* dropped = nullptr);
+
 class SurveyMap {
  public:
   explicit SurveyMap(const SurveyMapParams& params);

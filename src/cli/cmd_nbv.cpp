@@ -59,7 +59,8 @@ void run_nbv(const NbvOptions& o) {
       if (o.scanner_height > 0) {
         p.robot.scanner_height = o.scanner_height;
       } else {
-        const PreprocessResult pre = preprocess(*s.points, p.preprocess);
+        const PreprocessResult pre =
+            preprocess(*within_limits(*s.points, p.map.limits), p.preprocess);
         p.robot.scanner_height = pre.transform.translation().z();
         std::printf("  scanner height above the floor: %.2f m\n", p.robot.scanner_height);
       }
@@ -105,7 +106,9 @@ void add_nbv_command(CLI::App& app) {
       "One map update and next best view for real scans: preprocess each scan, place it by its "
       "pose (or register it to the first by ICP when no --pose is given), build the semioctree "
       "(occupancy, doors and windows, occlusion), score the candidate positions and report the "
-      "next best view and the stop percentage. Writes survey.json and scan_NN/ as `survey` does.");
+      "next best view and the stop percentage. Returns outside the scanner's limits (--min-range, "
+      "--elevation-min: on a robot, the lowest elevation that clears its body) are dropped: they "
+      "are the scanner's mount and the robot. Writes survey.json and scan_NN/ as `survey` does.");
   cmd->add_option("--cloud", o->clouds,
                   "scan file: .pcd, .ply, .xyz/.txt or .ptx (repeat for several scans)")
       ->required()

@@ -91,13 +91,18 @@ ScanOutcome SurveySession::add_scan(const IncomingScan& in,
   ScanOutcome out;
   json seconds;
 
-  // Stage 1: level this scan in its own frame, then place it by the reported pose.
+  // Stage 1: drop the returns outside the scanner's limits (its mount, the
+  // robot), level this scan in its own frame, then place it by the reported pose.
   auto t0 = std::chrono::steady_clock::now();
-  const PreprocessResult pre = preprocess(*in.points, params_.preprocess);
+  std::size_t outside = 0;
+  const Cloud::Ptr seen = within_limits(*in.points, params_.map.limits, &outside);
+  const PreprocessResult pre = preprocess(*seen, params_.preprocess);
   seconds["preprocess"] = since(t0);
-  std::printf("  preprocess: %zu → %zu points, ceiling %.2f m, tilt α %.2f° β %.2f° [%.2f s]\n",
-              pre.input_points, pre.output_points, pre.ceiling_height, pre.alpha_deg, pre.beta_deg,
-              seconds["preprocess"].get<double>());
+  std::printf(
+      "  preprocess: %zu → %zu points (%zu outside the scanner's limits dropped), ceiling %.2f m, "
+      "tilt α %.2f° β %.2f° [%.2f s]\n",
+      in.points->size(), pre.output_points, outside, pre.ceiling_height, pre.alpha_deg,
+      pre.beta_deg, seconds["preprocess"].get<double>());
   std::fflush(stdout);
   const Eigen::Isometry3d place = planar_pose(in.x, in.y, in.yaw_deg);
   Cloud::Ptr guess(new Cloud);
@@ -219,6 +224,7 @@ ScanOutcome SurveySession::add_scan(const IncomingScan& in,
   r["pose"] = pose_json(out.scanner_to_survey);
   r["points_raw"] = in.points_raw ? in.points_raw : in.points->size();
   r["points_kept"] = pre.output_points;
+  r["points_outside_limits"] = outside;
   json volume;
   r["octants"] = map_json(map_.tree(), volume);
   r["volume_percent"] = volume;
