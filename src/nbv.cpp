@@ -1,16 +1,17 @@
 #include "semioctree/nbv.h"
 
 #include <dynamicEDT3D/dynamicEDT3D.h>
-#include <time.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
 #include <stdexcept>
-#include <thread>
+
+#include "parallel_for.h"
 
 namespace semioctree {
 
@@ -23,38 +24,8 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-unsigned thread_count(unsigned requested) {
-  if (requested > 0) return requested;
-  return std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
-}
-
-double thread_cpu_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-}
-
-// Calls f(i, worker) for i in [0, n) on `threads` workers (worker < threads),
-// in chunks handed out in order; f must only write to slots of its own i (or
-// of its worker). Returns the CPU time of all workers (seconds), which unlike
-// the wall time hardly depends on the machine's load.
-template <class F>
-double parallel_for(std::size_t n, unsigned threads, std::size_t chunk, F&& f) {
-  std::atomic<std::size_t> next{0};
-  std::atomic<std::int64_t> cpu_ns{0};
-  auto work = [&](unsigned worker) {
-    const double c0 = thread_cpu_seconds();
-    for (std::size_t i; (i = next.fetch_add(chunk)) < n;)
-      for (std::size_t j = i; j < std::min(i + chunk, n); ++j) f(j, worker);
-    cpu_ns += std::int64_t((thread_cpu_seconds() - c0) * 1e9);
-  };
-  std::vector<std::thread> pool;
-  const unsigned t = static_cast<unsigned>(std::min<std::size_t>(threads, (n + chunk - 1) / chunk));
-  for (unsigned i = 1; i < t; ++i) pool.emplace_back(work, i);
-  work(0);
-  for (auto& th : pool) th.join();
-  return 1e-9 * double(cpu_ns.load());
-}
+using detail::parallel_for;
+using detail::thread_count;
 
 bool candidate_label(Label l) {
   return l == Label::kEmpty || l == Label::kScan || l == Label::kNbv;
@@ -93,6 +64,10 @@ bool blind_octant(const Octant& o, unsigned coarse_level, const std::vector<Poin
 struct Target {
   Point3 center;
   double weight = 1;
+  // Method 3: half the octant's side, and its faces on free space (bit 2a for
+  // the face at −half along axis a, bit 2a+1 for the one at +half).
+  double half = 0;
+  unsigned free_faces = 0;
   // Method 2: minimum-corner leaf cell (relative to the origin) of the level-ℓ
   // cell holding the target.
   std::int64_t cell[3] = {0, 0, 0};
@@ -431,7 +406,8 @@ Los los_cells(const SemiOcTree& tree, unsigned level, const Point3& a, const Tar
 
 unsigned resolve_level(const SemiOcTree& tree, const NbvParams& p) {
   if (p.method == 1) return tree.coarse_level();
-  if (p.method != 2) throw std::invalid_argument("NbvParams::method must be 1 or 2");
+  if (p.method == 3) return tree.coarse_level();
+  if (p.method != 2) throw std::invalid_argument("NbvParams::method must be 1, 2 or 3");
   if (p.level == NbvParams::kLeafLevel) return tree.coarse_level();
   if (p.level > tree.coarse_level())
     throw std::invalid_argument("NbvParams::level is finer than the tree's leaf level");
@@ -449,6 +425,51 @@ std::vector<Target> method1_targets(const SemiOcTree& tree) {
     out.push_back(t);
   });
   return out;
+}
+
+bool free_space(Label l) {
+  return l == Label::kEmpty || l == Label::kScan || l == Label::kNbv;
+}
+
+// Occluded octants with a face on free space: the occlusion frontier. The
+// neighbour across a face is the octant holding a point a quarter leaf beyond
+// the face's centre (a finer neighbour thus stands for the whole face).
+std::vector<Target> method3_targets(const SemiOcTree& tree) {
+  std::vector<Target> out;
+  const double step = 0.25 * tree.leaf_size();
+  tree.for_each_octant([&](const Octant& o) {
+    if (o.label() != Label::kOccluded) return;
+    Target t;
+    t.center = o.center;
+    t.half = 0.5 * o.size;
+    for (unsigned f = 0; f < 6; ++f) {
+      Point3 q = o.center;
+      const double d = (f & 1 ? 1.0 : -1.0) * (t.half + step);
+      (f < 2 ? q.x : f < 4 ? q.y : q.z) += d;
+      const auto nb = tree.find_octant(q);
+      if (nb && free_space(nb->label())) t.free_faces |= 1u << f;
+    }
+    if (t.free_faces == 0) return;
+    t.weight = o.size * o.size;
+    out.push_back(t);
+  });
+  return out;
+}
+
+// The free faces of a target that have `a` in front of them (beyond the face's plane).
+unsigned facing_faces(const Target& t, const Point3& a) {
+  const double rel[3] = {a.x - t.center.x, a.y - t.center.y, a.z - t.center.z};
+  unsigned out = 0;
+  for (unsigned axis = 0; axis < 3; ++axis) {
+    if (rel[axis] < -t.half) out |= 1u << (2 * axis);
+    if (rel[axis] > t.half) out |= 1u << (2 * axis + 1);
+  }
+  return out & t.free_faces;
+}
+
+// Method 3 weight of a target seen from a: the area of its free faces facing a.
+double facing_area(const Target& t, const Point3& a) {
+  return double(__builtin_popcount(facing_faces(t, a))) * t.weight;
 }
 
 std::vector<Target> method2_targets(const SemiOcTree& tree, unsigned level) {
@@ -652,11 +673,12 @@ std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry&
 
 // --- scores ---------------------------------------------------------------------------
 
-std::vector<double> score_positions(const SemiOcTree& tree, const std::vector<Point3>& positions,
-                                    const NbvParams& params, ScoringStats* stats) {
+namespace {
+
+std::vector<double> score_targets(const SemiOcTree& tree, const std::vector<Target>& targets,
+                                  const std::vector<Point3>& positions, const NbvParams& params,
+                                  ScoringStats* stats) {
   const unsigned level = resolve_level(tree, params);
-  const std::vector<Target> targets =
-      params.method == 1 ? method1_targets(tree) : method2_targets(tree, level);
   const Limits lim(params.limits);
   std::vector<double> scores(positions.size(), 0.0);
   std::vector<ScoringStats> per(positions.size());
@@ -677,7 +699,8 @@ std::vector<double> score_positions(const SemiOcTree& tree, const std::vector<Po
         double sum = 0;
         for (std::size_t i = 0; i < targets.size(); ++i) {
           const Target& t = targets[i];
-          if (!lim.in_view(a, t.center)) continue;
+          const double weight = params.method == 3 ? facing_area(t, a) : t.weight;
+          if (weight == 0 || !lim.in_view(a, t.center)) continue;
           ++st.segments;
           cache.aim(t.center);
           if (cache.blocked_in_bin() ||
@@ -686,8 +709,8 @@ std::vector<double> score_positions(const SemiOcTree& tree, const std::vector<Po
             ++st.blocked_by_cache;
             continue;
           }
-          const Los los = params.method == 1 ? los_octants(tree, a, t.center, &cache)
-                                             : los_cells(tree, level, a, t, &cache);
+          const Los los = params.method == 2 ? los_cells(tree, level, a, t, &cache)
+                                             : los_octants(tree, a, t.center, &cache);
           if (los.blocker) {  // keep the last two
             memo[2 * i + 1].store(memo[2 * i].load(std::memory_order_relaxed),
                                   std::memory_order_relaxed);
@@ -695,7 +718,8 @@ std::vector<double> score_positions(const SemiOcTree& tree, const std::vector<Po
           }
           if (!los.visible) continue;
           ++st.visible;
-          sum += t.weight / (1.0 + double(los.n));
+          // Method 3: a frontier face in view is new surface whatever lies on the way.
+          sum += params.method == 3 ? weight : weight / (1.0 + double(los.n));
         }
         scores[c] = sum;
       });
@@ -710,6 +734,20 @@ std::vector<double> score_positions(const SemiOcTree& tree, const std::vector<Po
     }
   }
   return scores;
+}
+
+std::vector<Target> targets_of(const SemiOcTree& tree, const NbvParams& params) {
+  const unsigned level = resolve_level(tree, params);
+  return params.method == 1   ? method1_targets(tree)
+         : params.method == 3 ? method3_targets(tree)
+                              : method2_targets(tree, level);
+}
+
+}  // namespace
+
+std::vector<double> score_positions(const SemiOcTree& tree, const std::vector<Point3>& positions,
+                                    const NbvParams& params, ScoringStats* stats) {
+  return score_targets(tree, targets_of(tree, params), positions, params, stats);
 }
 
 double stop_percentage(const SemiOcTree& tree, const Point3& nbv, const ScannerView& limits,
@@ -745,13 +783,14 @@ NbvResult next_best_view(const SemiOcTree& tree, const RobotGeometry& robot,
       find_candidates(tree, robot, robot_position, past_scans, params, &res.candidate_report);
   res.seconds_candidates = seconds_since(t0);
   t0 = std::chrono::steady_clock::now();
-  const std::vector<double> scores = score_positions(tree, positions, params, &res.scoring);
-  res.seconds_scoring = seconds_since(t0);
+  const std::vector<Target> targets = targets_of(tree, params);
+  const std::vector<double> scores = score_targets(tree, targets, positions, params, &res.scoring);
   res.candidates.reserve(positions.size());
   for (std::size_t i = 0; i < positions.size(); ++i) {
     res.candidates.push_back({positions[i], scores[i]});
     if (!res.best || scores[i] > res.best->score) res.best = res.candidates.back();
   }
+  res.seconds_scoring = seconds_since(t0);
   t0 = std::chrono::steady_clock::now();
   if (res.best)
     res.stop_percent = stop_percentage(tree, res.best->position, params.limits, params.threads);

@@ -1,11 +1,10 @@
 #include "semioctree/occlusion.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <thread>
 
 #include "packed_key_index.h"
+#include "parallel_for.h"
 
 namespace semioctree {
 
@@ -139,20 +138,6 @@ int samples_of(const Candidate& c, unsigned coarse_level, LatticePoint out[9]) {
   return 9;
 }
 
-// Runs f(i) for i in [0, n) on `threads` threads, in chunks.
-template <typename F>
-void parallel_for(std::size_t n, unsigned threads, F&& f) {
-  std::atomic<std::size_t> next{0};
-  auto work = [&] {
-    for (std::size_t i; (i = next.fetch_add(64)) < n;)
-      for (std::size_t j = i; j < std::min(i + 64, n); ++j) f(j);
-  };
-  std::vector<std::thread> pool;
-  for (unsigned t = 1; t < threads && n > 64 * t; ++t) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
-}
-
 }  // namespace
 
 Visibility point_visibility(const SemiOcTree& tree, const std::vector<ScannerView>& views,
@@ -182,9 +167,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
       todo.push_back({o.key, o.level, const_cast<SemiOcTreeNode*>(o.node)});
   });
   OcclusionReport report;
-  const unsigned threads = params.threads > 0
-                               ? params.threads
-                               : std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
+  const unsigned threads = detail::thread_count(params.threads);
   const unsigned leaf = tree.coarse_level();
   const double leaf_size = tree.leaf_size();
   detail::PackedKeyIndex index;          // lattice point → sample id
@@ -217,7 +200,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
     }
     visibility.resize(points.size());
     segments.assign(points.size() - first_new, 0);
-    parallel_for(points.size() - first_new, threads, [&](std::size_t i) {
+    detail::parallel_for(points.size() - first_new, threads, 64, [&](std::size_t i, unsigned) {
       const std::size_t id = first_new + i;
       visibility[id] = std::uint8_t(
           best_visibility<true>(tree, limits, unpack(points[id], leaf_size), segments[i]));

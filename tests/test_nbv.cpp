@@ -204,10 +204,36 @@ TEST(Nbv, Method2MergesFinerOctantsIntoCellsOfTheLevel) {
   EXPECT_DOUBLE_EQ(score_at(m.t, m.a, open_limits(2, 2)), 1.0);
 }
 
+// Method 3: the area of the free faces of occluded octants that face the
+// scanner and are not blocked, whatever occluded space lies on the way.
+TEST(Nbv, Method3CountsTheFrontierFacesFacingTheScanner) {
+  Map m(4, 2, 2);
+  const double face = kLeaf * kLeaf;
+  m.leaf(1.125, 0.425, 0.425, Label::kOccluded);
+  const NbvParams p = open_limits(3);
+  // In line along x: only the −x face faces the scanner.
+  EXPECT_NEAR(score_at(m.t, {0.425, 0.425, 0.425}, p), face, 1e-12);
+  // Off all three axes: the −x, +y and +z faces.
+  const Point3 high{0.425, 1.225, 1.225};
+  EXPECT_NEAR(score_at(m.t, high, p), 3 * face, 1e-12);
+  // A second occluded leaf at +x: the face the two share is not on free space.
+  m.leaf(1.175, 0.425, 0.425, Label::kOccluded);
+  EXPECT_NEAR(score_at(m.t, {0.425, 0.425, 0.425}, p), face, 1e-12);
+  EXPECT_NEAR(score_at(m.t, high, p), (3 + 2) * face, 1e-12);
+  // From beyond the pair along +x: only the second leaf's +x face.
+  EXPECT_NEAR(score_at(m.t, {2.425, 0.425, 0.425}, p), face, 1e-12);
+  // An occupied leaf on the line blocks it.
+  m.leaf(0.775, 0.425, 0.425, Label::kOccupied);
+  EXPECT_NEAR(score_at(m.t, {0.425, 0.425, 0.425}, p), 0.0, 1e-12);
+  // From straight below the first leaf (between the planes of its x faces),
+  // the −z faces of both leaves face the scanner, no x face of the first does.
+  EXPECT_NEAR(score_at(m.t, {1.125, 0.425, 0.025}, p), 2 * face, 1e-12);
+}
+
 TEST(Nbv, RejectsBadMethodOrLevel) {
   Map m(1, 1, 1);
   NbvParams p;
-  p.method = 3;
+  p.method = 4;
   EXPECT_THROW(score_at(m.t, {0.4, 0.4, 0.4}, p), std::invalid_argument);
   p.method = 2;
   p.level = 5;  // finer than the leaf (level 4)

@@ -38,6 +38,38 @@ json survey(const std::string& name, const std::string& args) {
   return r.exit_code == 0 ? read_json(out / "survey.json") : json();
 }
 
+// `coverage-bound` on the small box room: plans of 1..3 scans from the start.
+TEST(CoverageBound, PlansStartAtTheStartAndLocalSearchIsNeverWorse) {
+  const fs::path out = scratch() / "bound.json";
+  const auto r = run_cli("coverage-bound --scene " + kScenes +
+                         "box-room.scene.json --spacing 1.0 --max-scans 3 --out " + out.string() +
+                         " --cache " + (scratch() / "cache").string());
+  ASSERT_EQ(r.exit_code, 0) << r.all();
+  const json j = read_json(out);
+  ASSERT_EQ(j["plans"].size(), 3u);
+  double previous = 0;
+  for (std::size_t k = 0; k < 3; ++k) {
+    const json& plan = j["plans"][k];
+    EXPECT_EQ(plan["scans"], k + 1);
+    const double greedy = plan["greedy"]["coverage_percent"];
+    const double best = plan["local_search"]["coverage_percent"];
+    EXPECT_EQ(plan["greedy"]["positions"].size(), k + 1);
+    EXPECT_EQ(plan["greedy"]["positions"][0], json({2.0, 1.5}));  // the robot's start
+    EXPECT_EQ(plan["local_search"]["positions"][0], json({2.0, 1.5}));
+    EXPECT_GE(best, greedy);
+    EXPECT_GE(greedy, previous);
+    EXPECT_GT(greedy, 0.0);
+    EXPECT_LE(best, 100.0);
+    previous = greedy;
+  }
+  EXPECT_EQ(j["plans"][0]["greedy"]["coverage_percent"],
+            j["plans"][0]["local_search"]["coverage_percent"]);
+  const auto bad =
+      run_cli("coverage-bound --scene " + kScenes + "box-room.scene.json --max-scans 0");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.err.find("--max-scans must be at least 1"), std::string::npos) << bad.err;
+}
+
 TEST(Survey, BadInputIsAClearErrorAndANonZeroExit) {
   const std::string lab =
       "--scene " + kScenes + "lab.scene.json --out " + (scratch() / "bad").string();
@@ -50,7 +82,7 @@ TEST(Survey, BadInputIsAClearErrorAndANonZeroExit) {
   r = run_cli("survey " + lab + " --max-scans 0");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--max-scans must be at least 1"), std::string::npos) << r.err;
-  r = run_cli("survey " + lab + " --method 3");
+  r = run_cli("survey " + lab + " --method 4");
   EXPECT_NE(r.exit_code, 0);
   const fs::path junk = scratch() / "junk.pcd";
   std::ofstream(junk) << "this is not a point cloud\n";

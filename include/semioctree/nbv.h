@@ -72,6 +72,16 @@
 //    It costs one segment per level-ℓ cell of occluded space: at the leaf, as
 //    much as the homogeneous grid (the paper: "the smaller the octant size of
 //    the selected level, the longer the processing time").
+//  * Method 3 (ours; surface instead of volume): the targets are the occluded
+//    octants with a face on free space (empty, scan, nbv) — the occlusion
+//    frontier; the neighbour across a face is the octant holding the point a
+//    quarter leaf beyond the face's centre. A target adds the area of its free
+//    faces that face p (p beyond the face's plane) when the line to it is not
+//    blocked, whatever occluded space it crosses (S = area, no 1/(1+n)): the
+//    scanner looks through that face into the unseen space behind it, which
+//    is where the surfaces not yet scanned are. Volume rewards deep shadows
+//    near the floor (the floor is cut out of every scan) and hollow interiors;
+//    the frontier holds ~1/6 of the occluded octants, so it is also cheaper.
 // Scores are sums in a fixed order per candidate and candidates are scored
 // independently (in parallel), so results do not depend on the thread count.
 //
@@ -122,8 +132,8 @@ struct RobotGeometry {
 
 struct NbvParams {
   static constexpr unsigned kLeafLevel = ~0u;
-  int method = 1;                  // 1: all levels, volume-weighted; 2: one level
-  unsigned level = kLeafLevel;     // method 2: the level ℓ (kLeafLevel: the tree's leaf)
+  int method = 1;               // 1: all levels, volume-weighted; 2: one level; 3: frontier surface
+  unsigned level = kLeafLevel;  // method 2: the level ℓ (kLeafLevel: the tree's leaf)
   double candidate_spacing = 0.5;  // m, rounded to a whole number of leaves (≥ 1)
   unsigned threads = 0;            // 0: one per core; results do not depend on it
   // Range and elevation limits of the scanner (position ignored): for the

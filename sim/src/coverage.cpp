@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -21,6 +22,7 @@
 #include <system_error>
 #include <thread>
 #include <type_traits>
+#include <utility>
 
 namespace semioctree::sim {
 
@@ -701,21 +703,27 @@ class PointGrid {
   std::vector<Slot> slots_;
 };
 
-Coverage measure(const CoverageReference& reference, std::vector<Eigen::Vector3d> points,
-                 double tolerance) {
+std::vector<bool> flags(const CoverageReference& reference, std::vector<Eigen::Vector3d> points,
+                        double tolerance) {
   if (!(tolerance > 0)) throw std::invalid_argument("measure_coverage: tolerance must be > 0");
-  Coverage c;
-  c.reference_points = reference.points.size();
   points.erase(std::remove_if(points.begin(), points.end(),
                               [](const Eigen::Vector3d& p) { return !p.allFinite(); }),
                points.end());
   if (points.size() > std::numeric_limits<std::uint32_t>::max())
     throw std::invalid_argument("measure_coverage: too many points");
-  if (!points.empty()) {
-    const PointGrid grid(std::move(points), tolerance);
-    for (const auto& q : reference.points)
-      if (grid.any_within(q, tolerance)) ++c.covered;
-  }
+  std::vector<bool> out(reference.points.size(), false);
+  if (points.empty()) return out;
+  const PointGrid grid(std::move(points), tolerance);
+  for (std::size_t i = 0; i < reference.points.size(); ++i)
+    out[i] = grid.any_within(reference.points[i], tolerance);
+  return out;
+}
+
+Coverage measure(const CoverageReference& reference, std::vector<Eigen::Vector3d> points,
+                 double tolerance) {
+  Coverage c;
+  c.reference_points = reference.points.size();
+  for (bool f : flags(reference, std::move(points), tolerance)) c.covered += f;
   c.percent = c.reference_points
                   ? 100.0 * static_cast<double>(c.covered) / static_cast<double>(c.reference_points)
                   : 0.0;
@@ -843,6 +851,106 @@ Coverage measure_coverage(const CoverageReference& reference,
   points.reserve(measured_points_world.size());
   for (const auto& p : measured_points_world) points.push_back(p.cast<double>());
   return measure(reference, std::move(points), tolerance);
+}
+
+std::vector<bool> covered_samples(const CoverageReference& reference,
+                                  const std::vector<Eigen::Vector3f>& measured_points_world,
+                                  double tolerance) {
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(measured_points_world.size());
+  for (const auto& p : measured_points_world) points.push_back(p.cast<double>());
+  return flags(reference, std::move(points), tolerance);
+}
+
+namespace {
+
+// The sets as 64-bit words: the plan searches take unions and counts of them many times.
+struct PackedSets {
+  std::size_t words = 0, samples = 0;
+  std::vector<std::uint64_t> bits;  // sets × words
+  explicit PackedSets(const std::vector<std::vector<bool>>& covered) {
+    if (covered.empty()) throw std::invalid_argument("coverage plan: no scan positions");
+    samples = covered[0].size();
+    words = (samples + 63) / 64;
+    bits.assign(covered.size() * words, 0);
+    for (std::size_t v = 0; v < covered.size(); ++v) {
+      if (covered[v].size() != samples)
+        throw std::invalid_argument("coverage plan: the sets differ in size");
+      for (std::size_t i = 0; i < samples; ++i)
+        if (covered[v][i]) bits[v * words + i / 64] |= std::uint64_t(1) << (i % 64);
+    }
+  }
+  std::size_t sets() const { return bits.size() / std::max<std::size_t>(words, 1); }
+  const std::uint64_t* set(std::size_t v) const { return bits.data() + v * words; }
+  std::vector<std::uint64_t> union_of(const std::vector<std::size_t>& views,
+                                      std::size_t skip = SIZE_MAX) const {
+    std::vector<std::uint64_t> u(words, 0);
+    for (std::size_t k = 0; k < views.size(); ++k)
+      if (k != skip)
+        for (std::size_t w = 0; w < words; ++w) u[w] |= set(views[k])[w];
+    return u;
+  }
+  // The position adding most to `u` (lowest index on ties) and the size of the union.
+  std::pair<std::size_t, std::size_t> best_addition(const std::vector<std::uint64_t>& u) const {
+    std::size_t base = 0;
+    for (std::uint64_t x : u) base += std::size_t(__builtin_popcountll(x));
+    std::size_t best = 0, best_gain = 0;
+    for (std::size_t v = 0; v < sets(); ++v) {
+      std::size_t gain = 0;
+      for (std::size_t w = 0; w < words; ++w)
+        gain += std::size_t(__builtin_popcountll(set(v)[w] & ~u[w]));
+      if (gain > best_gain) best = v, best_gain = gain;
+    }
+    return {best, base + best_gain};
+  }
+  double percent(std::size_t count) const {
+    return samples ? 100.0 * double(count) / double(samples) : 0.0;
+  }
+};
+
+}  // namespace
+
+CoveragePlan greedy_coverage_plan(const std::vector<std::vector<bool>>& covered, std::size_t first,
+                                  std::size_t scans) {
+  const PackedSets sets(covered);
+  if (first >= sets.sets()) throw std::invalid_argument("coverage plan: no such first position");
+  CoveragePlan plan;
+  plan.views.push_back(first);
+  std::size_t count = 0;
+  for (std::size_t w = 0; w < sets.words; ++w)
+    count += std::size_t(__builtin_popcountll(sets.set(first)[w]));
+  while (plan.views.size() < scans) {
+    const auto [v, n] = sets.best_addition(sets.union_of(plan.views));
+    plan.views.push_back(v);
+    count = n;
+  }
+  plan.percent = sets.percent(count);
+  return plan;
+}
+
+CoveragePlan improve_coverage_plan(const std::vector<std::vector<bool>>& covered,
+                                   CoveragePlan plan) {
+  const PackedSets sets(covered);
+  if (plan.views.empty()) throw std::invalid_argument("coverage plan: no first position");
+  auto count_of = [&](const std::vector<std::size_t>& views) {
+    std::size_t n = 0;
+    for (std::uint64_t x : sets.union_of(views)) n += std::size_t(__builtin_popcountll(x));
+    return n;
+  };
+  std::size_t count = count_of(plan.views);
+  for (bool improved = true; improved;) {
+    improved = false;
+    for (std::size_t k = 1; k < plan.views.size(); ++k) {
+      const auto [v, n] = sets.best_addition(sets.union_of(plan.views, k));
+      if (n > count) {
+        plan.views[k] = v;
+        count = n;
+        improved = true;
+      }
+    }
+  }
+  plan.percent = sets.percent(count);
+  return plan;
 }
 
 }  // namespace semioctree::sim

@@ -18,6 +18,7 @@ void add_nbv_command(CLI::App& app);
 void add_scan_command(CLI::App& app);
 void add_scene_info_command(CLI::App& app);
 void add_survey_command(CLI::App& app);
+void add_coverage_bound_command(CLI::App& app);
 #endif
 
 }  // namespace semioctree::cli

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   semioctree::cli::add_scan_command(app);
   semioctree::cli::add_scene_info_command(app);
   semioctree::cli::add_survey_command(app);
+  semioctree::cli::add_coverage_bound_command(app);
 #endif
   try {
     app.parse(argc, argv);

@@ -51,9 +51,11 @@ void add_planning_options(CLI::App& cmd, PlanningOptions& o) {
   cmd.add_option("--leaf", o.leaf, "leaf (finest octant) size r, m")->capture_default_str();
   cmd.add_option("--coarse", o.coarse, "coarse voxel size L = r*2^k, m")->capture_default_str();
   cmd.add_option("--stop", o.stop, "stop percentage threshold (Eq 5), %")->capture_default_str();
-  cmd.add_option("--method", o.method,
-                 "NBV scoring: 1 = all levels weighted by volume, 2 = one level (--level)")
-      ->check(CLI::IsMember({1, 2}))
+  cmd.add_option(
+         "--method", o.method,
+         "NBV scoring: 1 = occluded volume, all levels (paper), 2 = one level (--level), 3 = "
+         "area of the occlusion frontier facing the position (surface, ours)")
+      ->check(CLI::IsMember({1, 2, 3}))
       ->capture_default_str();
   cmd.add_option("--level", o.level,
                  "method 2: the octree level scored, 0 = coarse voxels ... k = leaf (default: the "

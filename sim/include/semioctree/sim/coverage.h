@@ -112,4 +112,29 @@ Coverage measure_coverage(const CoverageReference& reference,
                           const std::vector<Eigen::Vector3f>& measured_points_world,
                           double tolerance = 0.03);
 
+// One flag per reference sample (in the order of reference.points): a measured point
+// (world frame) within `tolerance` metres. measure_coverage counts these flags.
+std::vector<bool> covered_samples(const CoverageReference& reference,
+                                  const std::vector<Eigen::Vector3f>& measured_points_world,
+                                  double tolerance = 0.03);
+
+// Survey plans made with perfect knowledge of what each scan position would cover: an
+// upper reference for a planner that only knows what it has scanned so far.
+// `covered[v]` holds the covered_samples of a scan from position v (all the same size).
+struct CoveragePlan {
+  std::vector<std::size_t> views;  // positions, in scan order; views[0] is the given first
+  double percent = 0.0;            // samples covered by their union, % of all samples
+};
+
+// Greedy: after `first`, each scan is the position that adds most samples (lowest index on
+// ties), until `scans` scans. Throws std::invalid_argument on empty or unequal sets.
+CoveragePlan greedy_coverage_plan(const std::vector<std::vector<bool>>& covered, std::size_t first,
+                                  std::size_t scans);
+
+// Local search from `plan`: replaces one scan (never views[0]) at a time by the position
+// that covers most together with the others, while that strictly improves the union. The
+// result covers at least as much as `plan`; it is a local optimum, not necessarily the best.
+CoveragePlan improve_coverage_plan(const std::vector<std::vector<bool>>& covered,
+                                   CoveragePlan plan);
+
 }  // namespace semioctree::sim
