@@ -122,7 +122,8 @@ void add_coverage_bound_command(CLI::App& app) {
       "simulator, then the plans are chosen greedily (each scan the one that adds most) and "
       "improved by local search (swap one scan while the union grows). Coverage is that of "
       "`survey` (reference surface samples within 3 cm of a point). A yardstick for the NBV "
-      "planner, which only knows what it has scanned.");
+      "planner, which only knows what it has scanned. One simulated scan per position: the lab "
+      "at 0.25 m (645 positions) takes about 9 minutes on 2 cores.");
   cmd->add_option("--scene", a->scene, "scene file (.scene.json)")->required();
   cmd->add_option("--spacing", a->spacing, "spacing of the grid of scan positions, m")
       ->check(CLI::PositiveNumber)
