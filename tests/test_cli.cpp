@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -129,6 +130,32 @@ TEST(Cli, DiscretizeWritesEveryFile) {
   EXPECT_NE(bad.all().find("power of two"), std::string::npos) << bad.all();
   const CliRun missing = run_cli("discretize --cloud " + (dir / "nope.pcd").string() + " --out x");
   EXPECT_NE(missing.exit_code, 0);
+}
+
+// `classify` drops the returns outside the scanner's limits (a real scanner's
+// mount and robot) before mapping them, as `survey` and `nbv` do.
+TEST(Cli, ClassifyDropsReturnsOutsideTheScannerLimits) {
+  const auto dir = testing::temp_dir("cli-classify");
+  Cloud::Ptr room = testing::synthetic_room(6, 4, 2.8, 0.04);
+  for (int i = 0; i < 400; ++i) {  // a mount: a disc 0.1 m under the optical centre
+    const double a = 0.0157 * i, r = 0.05 + 0.1 * (i % 7) / 7.0;
+    room->push_back(pcl::PointXYZ{float(r * std::cos(a)), float(r * std::sin(a)), -0.1f});
+  }
+  std::size_t outside = 0;  // closer than 0.6 m or below −60° (the default limits)
+  for (const auto& p : *room) {
+    const double range = std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z);
+    outside += range < 0.6 || double(p.z) < -std::sin(60 * M_PI / 180) * range;
+  }
+  ASSERT_GT(outside, 400u);
+  pcl::io::savePCDFileBinary((dir / "room.pcd").string(), *room);
+  const CliRun r =
+      run_cli("classify --cloud " + (dir / "room.pcd").string() +
+              " --pose 3,2,1.5,0 --leaf 0.1 --coarse 0.8 --out " + (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.all();
+  EXPECT_NE(r.all().find(std::to_string(outside) + " outside the scanner's limits dropped"),
+            std::string::npos)
+      << outside << "\n"
+      << r.all();
 }
 
 TEST(Cli, CompareWritesTablesAndChart) {

@@ -5,13 +5,15 @@
 #include <filesystem>
 
 #include "semioctree/scan_io.h"
+#include "semioctree/update.h"
 #ifdef SEMIOCTREE_HAVE_SIM
 #include "sim_input.h"
 #endif
 
 namespace semioctree::cli {
 
-PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& params) {
+PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& params,
+                             const ScannerView* limits) {
   if (in.files.empty()) throw std::invalid_argument("no --cloud file given");
   if (!in.poses.empty() && in.poses.size() != in.files.size())
     throw std::invalid_argument("give one --pose per --cloud file (" +
@@ -30,14 +32,18 @@ PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& param
         s.pose = parse_pose(in.poses[i]);
       else if (!in.pose_file.empty())
         s.pose = read_pose_json(in.pose_file);
+      std::size_t outside = 0;
+      if (limits) s.points = within_limits(*s.points, *limits, &outside);
+      out.outside_limits += outside;
       const Cloud::Ptr world = to_survey_frame(s);
       merged += *world;
       origins.push_back(s.pose.position());
-      out.raw_points += s.points->size() + s.invalid_dropped;
+      out.raw_points += s.points->size() + s.invalid_dropped + outside;
       out.invalid_dropped += s.invalid_dropped;
       std::printf(
-          "read %s: %zu points (%zu invalid dropped), scanner at (%.2f, %.2f, %.2f) [%.2f s]\n",
-          s.source.c_str(), s.points->size(), s.invalid_dropped, s.pose.position().x(),
+          "read %s: %zu points (%zu invalid, %zu outside the scanner's limits dropped), scanner "
+          "at (%.2f, %.2f, %.2f) [%.2f s]\n",
+          s.source.c_str(), s.points->size(), s.invalid_dropped, outside, s.pose.position().x(),
           s.pose.position().y(), s.pose.position().z(),
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     }
@@ -96,13 +102,14 @@ void add_scan_source_options(CLI::App& cmd, ScanSource& src, const std::string& 
       ->capture_default_str();
 }
 
-PreparedCloud prepare(const ScanSource& src, const std::string& command) {
+PreparedCloud prepare(const ScanSource& src, const std::string& command,
+                      const ScannerView* limits) {
   if (src.input.files.empty() && src.scene.empty())
     throw std::invalid_argument(command + ": give --cloud FILE or --scene FILE");
 #ifdef SEMIOCTREE_HAVE_SIM
   if (!src.scene.empty()) return scan_scene_at_start(src.scene, src.seed, src.pre);
 #endif
-  return prepare_clouds(src.input, src.pre);
+  return prepare_clouds(src.input, src.pre, limits);
 }
 
 void add_scanner_limit_options(CLI::App& cmd, ScannerView& limits) {

@@ -24,9 +24,13 @@ struct PreparedCloud {
   std::vector<Point3> scanners;  // scanner positions in the levelled frame
   std::size_t raw_points = 0;
   std::size_t invalid_dropped = 0;
+  std::size_t outside_limits = 0;  // returns outside the scanner's limits, dropped
 };
 
-PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& params);
+// With `limits`, each scan first loses its returns outside the scanner's
+// limits (within_limits: the scanner's mount, the robot), as in `survey`/`nbv`.
+PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& params,
+                             const ScannerView* limits = nullptr);
 
 // The input of every command that maps scans: --cloud/--pose (real scans), or
 // --scene/--seed (the synthetic scanner, when built with sim/), and the
@@ -42,7 +46,8 @@ struct ScanSource {
 void add_scan_source_options(CLI::App& cmd, ScanSource& src, const std::string& pose_help);
 // Reads (or scans) and preprocesses; throws std::invalid_argument when neither
 // --cloud nor --scene was given.
-PreparedCloud prepare(const ScanSource& src, const std::string& command);
+PreparedCloud prepare(const ScanSource& src, const std::string& command,
+                      const ScannerView* limits = nullptr);
 // --max-range, --min-range, --elevation-min, --elevation-max.
 void add_scanner_limit_options(CLI::App& cmd, ScannerView& limits);
 // The title of a slice image: the input file's name.

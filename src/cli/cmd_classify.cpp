@@ -31,7 +31,9 @@ void add_classify_command(CLI::App& app) {
       "as empty, occupied, occluded, door, window or out by ray casting from the scanner positions "
       "(the "
       "occlusion study). Doors and windows are detected first (walls by RANSAC, holes confirmed by "
-      "line of sight). Writes the files of `discretize` with all classes, and openings.json.");
+      "line of sight). Returns outside the scanner's limits (--min-range, --elevation-min: its "
+      "mount, the robot) are dropped first. Writes the files of `discretize` with all classes, "
+      "and openings.json.");
   add_scan_source_options(*cmd, o->source,
                           "scanner pose X,Y,Z[,YAW_DEG] of each --cloud in the survey frame "
                           "(default: the origin, or the pose stored in a PTX file)");
@@ -45,7 +47,7 @@ void add_classify_command(CLI::App& app) {
                   "height of the slice image in metres above the floor (default: scanner height)");
   cmd->callback([o] {
     SemiOcTree::coarse_level_for(o->disc.leaf, o->disc.coarse);
-    const PreparedCloud cloud = prepare(o->source, "classify");
+    const PreparedCloud cloud = prepare(o->source, "classify", &o->limits);
     auto t0 = std::chrono::steady_clock::now();
     const auto tree = discretize(*cloud.pre.cloud, cloud.pre.ceiling_height, o->disc);
     std::printf("discretize: %zu coarse voxels [%.2f s]\n", tree->coarse_count(),
