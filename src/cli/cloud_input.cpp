@@ -123,6 +123,14 @@ void add_scanner_limit_options(CLI::App& cmd, ScannerView& limits) {
       ->capture_default_str();
 }
 
+void add_grid_options(CLI::App& cmd, DiscretizeParams& grid) {
+  cmd.add_option("--leaf", grid.leaf, "leaf (finest octant) size r in metres")
+      ->capture_default_str();
+  cmd.add_option("--coarse", grid.coarse,
+                 "coarse voxel size L in metres; must be r*2^k (L = r gives the homogeneous grid)")
+      ->capture_default_str();
+}
+
 std::string source_name(const ScanSource& src) {
   return std::filesystem::path(src.scene.empty() ? src.input.files.front() : src.scene)
       .filename()

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "semioctree/discretize.h"
 #include "semioctree/occlusion.h"
 #include "semioctree/octomap_ext/semioctree.h"
 #include "semioctree/preprocess.h"
@@ -50,6 +51,8 @@ PreparedCloud prepare(const ScanSource& src, const std::string& command,
                       const ScannerView* limits = nullptr);
 // --max-range, --min-range, --elevation-min, --elevation-max.
 void add_scanner_limit_options(CLI::App& cmd, ScannerView& limits);
+// --leaf, --coarse: the semioctree's grid.
+void add_grid_options(CLI::App& cmd, DiscretizeParams& grid);
 // The title of a slice image: the input file's name.
 std::string source_name(const ScanSource& src);
 

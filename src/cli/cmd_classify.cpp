@@ -37,10 +37,7 @@ void add_classify_command(CLI::App& app) {
   add_scan_source_options(*cmd, o->source,
                           "scanner pose X,Y,Z[,YAW_DEG] of each --cloud in the survey frame "
                           "(default: the origin, or the pose stored in a PTX file)");
-  cmd->add_option("--leaf", o->disc.leaf, "leaf (finest octant) size r in metres")
-      ->capture_default_str();
-  cmd->add_option("--coarse", o->disc.coarse, "coarse voxel size L = r*2^k in metres")
-      ->capture_default_str();
+  add_grid_options(*cmd, o->disc);
   add_scanner_limit_options(*cmd, o->limits);
   cmd->add_option("--out", o->out, "output directory")->required();
   cmd->add_option("--slice-height", o->slice_height,
