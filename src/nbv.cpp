@@ -27,7 +27,8 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 using detail::parallel_for;
 using detail::thread_count;
 
-bool candidate_label(Label l) {
+// Space seen empty (markers of scan and NBV positions included).
+bool free_space(Label l) {
   return l == Label::kEmpty || l == Label::kScan || l == Label::kNbv;
 }
 
@@ -427,10 +428,6 @@ std::vector<Target> method1_targets(const SemiOcTree& tree) {
   return out;
 }
 
-bool free_space(Label l) {
-  return l == Label::kEmpty || l == Label::kScan || l == Label::kNbv;
-}
-
 // Occluded octants with a face on free space: the occlusion frontier. The
 // neighbour across a face is the octant holding a point a quarter leaf beyond
 // the face's centre (a finer neighbour thus stands for the whole face).
@@ -650,7 +647,7 @@ std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry&
       ++rep.grid_points;
       const Point3 p((double(gx) + 0.5) * r, (double(gy) + 0.5) * r, robot.scanner_height);
       const auto o = tree.find_octant(p);
-      if (!o || !candidate_label(o->label())) {
+      if (!o || !free_space(o->label())) {
         ++rep.not_empty;
         continue;
       }

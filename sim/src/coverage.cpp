@@ -844,22 +844,25 @@ Coverage measure_coverage(const CoverageReference& reference,
   return measure(reference, measured_points_world, tolerance);
 }
 
+namespace {
+std::vector<Eigen::Vector3d> to_double(const std::vector<Eigen::Vector3f>& points) {
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(points.size());
+  for (const auto& p : points) out.push_back(p.cast<double>());
+  return out;
+}
+}  // namespace
+
 Coverage measure_coverage(const CoverageReference& reference,
                           const std::vector<Eigen::Vector3f>& measured_points_world,
                           double tolerance) {
-  std::vector<Eigen::Vector3d> points;
-  points.reserve(measured_points_world.size());
-  for (const auto& p : measured_points_world) points.push_back(p.cast<double>());
-  return measure(reference, std::move(points), tolerance);
+  return measure(reference, to_double(measured_points_world), tolerance);
 }
 
 std::vector<bool> covered_samples(const CoverageReference& reference,
                                   const std::vector<Eigen::Vector3f>& measured_points_world,
                                   double tolerance) {
-  std::vector<Eigen::Vector3d> points;
-  points.reserve(measured_points_world.size());
-  for (const auto& p : measured_points_world) points.push_back(p.cast<double>());
-  return flags(reference, std::move(points), tolerance);
+  return flags(reference, to_double(measured_points_world), tolerance);
 }
 
 namespace {
