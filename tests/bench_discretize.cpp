@@ -3,11 +3,11 @@
 // the homogeneous grid over the same region, in one run. Prints JSON.
 //
 //   bench_discretize [--rounds R]
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -24,15 +24,16 @@ double since(std::chrono::steady_clock::time_point t0) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  CLI::App app{
+      "Benchmark: preprocessing + discretization of one lab scan (decimated to ~400 000 points) "
+      "at 0.8 -> 0.05 m, the semioctree against the homogeneous grid over the same region, in "
+      "one run. Prints JSON on stdout, progress on stderr."};
   int rounds = 3;
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--rounds") && i + 1 < argc)
-      rounds = std::max(1, std::atoi(argv[++i]));
-    else {
-      std::fprintf(stderr, "usage: %s [--rounds R]\n", argv[0]);
-      return 2;
-    }
-  }
+  app.add_option("--rounds", rounds,
+                 "number of timed rounds; the best (shortest) round of each method is reported")
+      ->check(CLI::Range(1, std::numeric_limits<int>::max(), "POSITIVE"))
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
   std::fprintf(stderr, "scanning the lab ...\n");
   const testing::LabScan lab = testing::scan_lab();
   const Cloud& cloud = lab.world;
