@@ -18,7 +18,6 @@ namespace semioctree {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
-constexpr double kCornerInset = 0.02;  // as OcclusionParams::corner_inset
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -51,7 +50,11 @@ bool blind_octant(const Octant& o, unsigned coarse_level, const std::vector<Poin
   };
   if (!blind(o.center)) return false;
   if (o.level >= coarse_level) return true;  // a leaf is judged by its centre
-  const double h = 0.5 * o.size * (1.0 - 2.0 * kCornerInset);
+  // A larger octant by the centres of its corner leaves: the blind zone of one
+  // scan (a ball, a cone) is convex, so they stand for every leaf inside, and an
+  // octant merged from blind leaves (a pruned map) stays blind.
+  const double leaf = o.size / double(1u << (coarse_level - o.level));
+  const double h = 0.5 * (o.size - leaf);
   for (int k = 0; k < 8; ++k) {
     const Point3 q(o.center.x + ((k & 1) ? h : -h), o.center.y + ((k & 2) ? h : -h),
                    o.center.z + ((k & 4) ? h : -h));

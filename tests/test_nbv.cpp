@@ -569,6 +569,30 @@ TEST(Nbv, BlindZoneUnderPastScansIsNotAnObstacle) {
       find_candidates(*tree, RobotGeometry{}, {1.0, 2.0, 0}, {Point3(3.0, 3.2, 1.5)}, p).empty());
 }
 
+// A pruned map (siblings with one label merged, as the survey's map after each
+// scan) frees the same blind zone as the map before pruning: the rule must not
+// depend on how the cone is subdivided.
+TEST(Nbv, BlindZoneRuleGivesTheSameCandidatesOnAPrunedMap) {
+  const auto tree = discretize(room_with_pillar(), 2.4, {0.05, 0.8});
+  const Point3 scan(1.0, 2.0, 1.5);
+  study_occlusion(*tree, {ScannerView{scan}});
+  NbvParams p;
+  p.candidate_spacing = 0.1;
+  const auto before = find_candidates(*tree, RobotGeometry{}, {1.0, 2.0, 0}, {scan}, p);
+  ASSERT_FALSE(before.empty());
+  const std::size_t nodes = tree->calcNumNodes();
+  tree->prune();
+  ASSERT_LT(tree->calcNumNodes(), nodes);  // blind leaves did merge
+  CandidateReport rep;
+  const auto after = find_candidates(*tree, RobotGeometry{}, {1.0, 2.0, 0}, {scan}, p, &rep);
+  EXPECT_GT(rep.blind_octants_freed, 0u);
+  ASSERT_EQ(after.size(), before.size());
+  for (std::size_t i = 0; i < after.size(); ++i) {
+    EXPECT_EQ(after[i].x, before[i].x);
+    EXPECT_EQ(after[i].y, before[i].y);
+  }
+}
+
 // --- the NBV and the stop percentage --------------------------------------------------------
 
 // 4.8 × 4.8 × 2.4 m, a full-height partition at x = 2.4 for y ∈ [1.6, 3.2),

@@ -81,6 +81,10 @@ TEST(Update, SecondScanRefinesTheMapLikeARebuild) {
     }
   });
   EXPECT_EQ(map.scanners().size(), 2u);
+  // The map is kept pruned: no eight siblings share one label.
+  const std::size_t nodes = map.tree().calcNumNodes();
+  map.tree().prune();
+  EXPECT_EQ(map.tree().calcNumNodes(), nodes);
 
   // The same two scans classified from scratch from both positions.
   Cloud both = room_scan(false);
