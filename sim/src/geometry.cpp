@@ -254,10 +254,6 @@ void add_wall(TriangleSink& sink, const Wall& wall, PartRef part) {
         vid[(s * nu + i) * nv + j] = sink.vertex({xy.x(), xy.y(), g.v[j]});
       }
   auto V = [&](int s, std::size_t i, std::size_t j) { return vid[(s * nu + i) * nv + j]; };
-  auto solid = [&](long i, long j) {
-    return i >= 0 && j >= 0 && i < static_cast<long>(nu - 1) && j < static_cast<long>(nv - 1) &&
-           g.solid[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
-  };
   for (std::size_t i = 0; i + 1 < nu; ++i)
     for (std::size_t j = 0; j + 1 < nv; ++j) {
       if (!g.solid[i][j]) continue;
@@ -267,15 +263,15 @@ void add_wall(TriangleSink& sink, const Wall& wall, PartRef part) {
   // Faces across the thickness wherever a solid cell meets a hole or the outside.
   for (std::size_t i = 0; i < nu; ++i)
     for (std::size_t j = 0; j + 1 < nv; ++j) {
-      const bool before = solid(static_cast<long>(i) - 1, static_cast<long>(j));
-      const bool after = solid(static_cast<long>(i), static_cast<long>(j));
+      const bool before = g.solid_at(static_cast<long>(i) - 1, static_cast<long>(j));
+      const bool after = g.solid_at(static_cast<long>(i), static_cast<long>(j));
       if (before == after) continue;
       sink.quad(V(0, i, j), V(1, i, j), V(1, i, j + 1), V(0, i, j + 1), before ? d3 : -d3, part);
     }
   for (std::size_t j = 0; j < nv; ++j)
     for (std::size_t i = 0; i + 1 < nu; ++i) {
-      const bool below = solid(static_cast<long>(i), static_cast<long>(j) - 1);
-      const bool above = solid(static_cast<long>(i), static_cast<long>(j));
+      const bool below = g.solid_at(static_cast<long>(i), static_cast<long>(j) - 1);
+      const bool above = g.solid_at(static_cast<long>(i), static_cast<long>(j));
       if (below == above) continue;
       sink.quad(V(0, i, j), V(1, i, j), V(1, i + 1, j), V(0, i + 1, j), below ? z3 : -z3, part);
     }

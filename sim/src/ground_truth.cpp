@@ -55,10 +55,6 @@ void sample_wall(const Wall& wall, double spacing, PartRef part, std::vector<Sur
     const Eigen::Vector2d xy = wall.from + d2 * u + n2 * (side * wall.thickness / 2);
     return Eigen::Vector3d(xy.x(), xy.y(), v);
   };
-  auto solid = [&](long i, long j) {
-    return i >= 0 && j >= 0 && i < static_cast<long>(nu - 1) && j < static_cast<long>(nv - 1) &&
-           g.solid[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
-  };
   // Same faces as the tessellation: both sides of each solid cell, and the faces across
   // the thickness where a solid cell meets a hole or the outside (ends, jambs, sills, top).
   for (std::size_t i = 0; i + 1 < nu; ++i)
@@ -70,15 +66,15 @@ void sample_wall(const Wall& wall, double spacing, PartRef part, std::vector<Sur
     }
   for (std::size_t i = 0; i < nu; ++i)
     for (std::size_t j = 0; j + 1 < nv; ++j) {
-      const bool before = solid(static_cast<long>(i) - 1, static_cast<long>(j));
-      if (before == solid(static_cast<long>(i), static_cast<long>(j))) continue;
+      const bool before = g.solid_at(static_cast<long>(i) - 1, static_cast<long>(j));
+      if (before == g.solid_at(static_cast<long>(i), static_cast<long>(j))) continue;
       sample_rect(point(g.u[i], -1, g.v[j]), n, wall.thickness, z, g.v[j + 1] - g.v[j],
                   before ? d : -d, spacing, part, out);
     }
   for (std::size_t j = 0; j < nv; ++j)
     for (std::size_t i = 0; i + 1 < nu; ++i) {
-      const bool below = solid(static_cast<long>(i), static_cast<long>(j) - 1);
-      if (below == solid(static_cast<long>(i), static_cast<long>(j))) continue;
+      const bool below = g.solid_at(static_cast<long>(i), static_cast<long>(j) - 1);
+      if (below == g.solid_at(static_cast<long>(i), static_cast<long>(j))) continue;
       sample_rect(point(g.u[i], -1, g.v[j]), d, g.u[i + 1] - g.u[i], n, wall.thickness,
                   below ? z : -z, spacing, part, out);
     }

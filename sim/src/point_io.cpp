@@ -80,32 +80,37 @@ void write_atomically(const std::string& path, Write write) {
   }
 }
 
+// The pose (scanner frame → world) as the file's viewpoint (PCD VIEWPOINT, PLY
+// obj_info), so that readers can place the scan.
+struct Viewpoint {
+  Eigen::Vector4f origin;
+  Eigen::Quaternionf orientation;
+};
+Viewpoint viewpoint_of(const Scan& scan) {
+  const Eigen::Isometry3d t = scan.sensor_to_world();
+  return {Eigen::Vector4f(static_cast<float>(t.translation().x()),
+                          static_cast<float>(t.translation().y()),
+                          static_cast<float>(t.translation().z()), 0.0f),
+          Eigen::Quaternionf(t.rotation().cast<float>())};
+}
+
 }  // namespace
 
 void write_pcd(const std::string& path, const Scan& scan) {
   const pcl::PCLPointCloud2 cloud = to_cloud(scan);
-  // The pose (scanner frame → world) as the PCD viewpoint.
-  const Eigen::Isometry3d t = scan.sensor_to_world();
-  const Eigen::Vector4f origin(static_cast<float>(t.translation().x()),
-                               static_cast<float>(t.translation().y()),
-                               static_cast<float>(t.translation().z()), 0.0f);
-  const Eigen::Quaternionf orientation(t.rotation().cast<float>());
+  const Viewpoint vp = viewpoint_of(scan);
   write_atomically(path, [&](const std::string& tmp) {
     pcl::PCDWriter writer;
-    return writer.writeBinary(tmp, cloud, origin, orientation);
+    return writer.writeBinary(tmp, cloud, vp.origin, vp.orientation);
   });
 }
 
 void write_ply(const std::string& path, const Scan& scan) {
   const pcl::PCLPointCloud2 cloud = to_cloud(scan);
-  const Eigen::Isometry3d t = scan.sensor_to_world();
-  const Eigen::Vector4f origin(static_cast<float>(t.translation().x()),
-                               static_cast<float>(t.translation().y()),
-                               static_cast<float>(t.translation().z()), 0.0f);
-  const Eigen::Quaternionf orientation(t.rotation().cast<float>());
+  const Viewpoint vp = viewpoint_of(scan);
   write_atomically(path, [&](const std::string& tmp) {
     pcl::PLYWriter writer;
-    return writer.writeBinary(tmp, cloud, origin, orientation, true);
+    return writer.writeBinary(tmp, cloud, vp.origin, vp.orientation, true);
   });
 }
 

@@ -46,6 +46,12 @@ struct WallGrid {
   std::vector<double> u;
   std::vector<double> v;
   std::vector<std::vector<bool>> solid;  // [iu][iv], size (u.size()-1) x (v.size()-1)
+  // solid[i][j], false outside the grid (the wall's ends and top face the outside).
+  bool solid_at(long i, long j) const {
+    return i >= 0 && j >= 0 && i < static_cast<long>(solid.size()) &&
+           j < static_cast<long>(solid[static_cast<std::size_t>(i)].size()) &&
+           solid[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
+  }
 };
 WallGrid wall_grid(const Wall& wall);
 
