@@ -240,6 +240,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
     }
     todo.swap(children);
   }
+  if (params.prune) tree.prune();
   return report;
 }
 

@@ -93,9 +93,6 @@ ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,
     op.scope = OcclusionScope::kNewViews;
     rep.retest = study_occlusion(*tree_, {all.back()}, op);
   }
-  // Occlusion splits partly visible octants down to the leaf; siblings left with
-  // one label merge back.
-  tree_->prune();
   rep.seconds_occlusion = since(t0);
   return rep;
 }

@@ -56,7 +56,6 @@ std::unique_ptr<SemiOcTree> classified_map(const PreprocessResult& pre, const Po
   const auto openings = detect_openings(*pre.cloud, pre.ceiling_height, *tree, {origin});
   label_openings(*tree, openings);
   study_occlusion(*tree, {ScannerView{origin}});
-  tree->prune();  // as the survey's map (SurveyMap::add_scan)
   tree->compact();
   *seconds = since(t0);
   return tree;

@@ -94,6 +94,25 @@ TEST(Occlusion, SameResultForAnyThreadCount) {
   EXPECT_EQ(maps[0], maps[2]);
 }
 
+// The study merges back the splits whose children all got one verdict: the
+// same labels as without merging, in fewer octants, none of them collapsible.
+TEST(Occlusion, SiblingsLeftWithOneLabelAreMerged) {
+  const ScannerView view{Point3(1.0, 2.0, 1.2)};
+  const auto merged = discretize(room_with_pillar(), 2.4, {0.05, 0.8});
+  const auto split = discretize(room_with_pillar(), 2.4, {0.05, 0.8});
+  study_occlusion(*merged, {view});
+  OcclusionParams keep;
+  keep.prune = false;
+  study_occlusion(*split, {view}, keep);
+  const std::size_t merged_nodes = merged->calcNumNodes();
+  EXPECT_LT(merged_nodes, split->calcNumNodes());
+  merged->prune();
+  EXPECT_EQ(merged->calcNumNodes(), merged_nodes);
+  const auto a = merged->statistics(), b = split->statistics();
+  for (Label l : {Label::kEmpty, Label::kOccupied, Label::kOccluded, Label::kOut})
+    EXPECT_NEAR(a.volume[std::size_t(l)], b.volume[std::size_t(l)], 1e-9) << label_name(l);
+}
+
 TEST(Occlusion, SecondScannerUnoccludesWhatItSees) {
   const auto tree = discretize(room_with_pillar(), 2.4, {0.05, 0.8});
   const ScannerView first{Point3(1.0, 2.0, 1.2)}, second{Point3(3.4, 2.0, 1.2)};

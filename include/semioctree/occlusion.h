@@ -44,6 +44,10 @@ struct OcclusionParams {
   OcclusionScope scope = OcclusionScope::kAll;
   // Worker threads (0: one per core); the result is the same for any count.
   unsigned threads = 0;
+  // Afterwards merge the siblings left with one label (SemiOcTree::prune): a
+  // split whose children all got the same verdict is undone, so the result is
+  // the same map whatever subdivision the study started from.
+  bool prune = true;
 };
 
 struct OcclusionReport {
