@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "packed_key_index.h"
+#include "semioctree/octomap_ext/packed_key_map.h"
 
 namespace semioctree {
 
@@ -102,7 +102,7 @@ std::size_t mark_occupied(SemiOcTree& tree, const Cloud& cloud, double ceiling_h
   // leaves are labelled in Morton (depth-first) order, so that successive
   // descents share their path and find it in cache.
   const unsigned leaf = tree.coarse_level();
-  detail::PackedKeyIndex seen(cloud.size());
+  PackedKeyMap<std::uint32_t> seen(cloud.size());
   std::vector<std::uint64_t> order;
   order.reserve(cloud.size());
   for (const auto& p : cloud) {

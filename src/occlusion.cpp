@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "packed_key_index.h"
 #include "parallel_for.h"
+#include "semioctree/octomap_ext/packed_key_map.h"
 
 namespace semioctree {
 
@@ -170,7 +170,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
   const unsigned threads = detail::thread_count(params.threads);
   const unsigned leaf = tree.coarse_level();
   const double leaf_size = tree.leaf_size();
-  detail::PackedKeyIndex index;          // lattice point → sample id
+  PackedKeyMap<std::uint32_t> index;     // lattice point → sample id
   std::vector<LatticePoint> points;      // by sample id
   std::vector<std::uint8_t> visibility;  // by sample id
   std::vector<std::uint32_t> samples;    // ids of each candidate's samples, 9 per candidate
@@ -193,7 +193,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
       }
       for (int i = 0; i < n; ++i) {
         const auto next = static_cast<std::uint32_t>(points.size());
-        const std::uint32_t id = index.find_or_add(s[i], next);
+        const std::uint32_t id = *index.try_emplace(s[i], next).first;
         if (id == next) points.push_back(s[i]);
         samples[9 * c + i] = id;
       }

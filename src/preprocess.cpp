@@ -15,7 +15,7 @@
 #include <sstream>
 #include <vector>
 
-#include "packed_key_index.h"
+#include "semioctree/octomap_ext/packed_key_map.h"
 
 namespace semioctree {
 
@@ -177,7 +177,7 @@ namespace {
 // Number of cells of side `spacing` holding a point: the size UniformSampling
 // would give, without building its output.
 std::size_t count_cells(const Cloud& cloud, double spacing) {
-  detail::PackedKeyIndex cells(cloud.size());
+  PackedKeyMap<std::uint32_t> cells(cloud.size());
   const double inv = 1.0 / spacing;
   auto cell = [inv](float v) {
     return std::uint64_t(std::int64_t(std::floor(double(v) * inv)) & 0x1fffff);

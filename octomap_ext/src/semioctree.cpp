@@ -231,8 +231,8 @@ SemiOcTreeNode* SemiOcTree::find_coarse(const CoarseIndex& c) const {
   const int v[3] = {c.x + off, c.y + off, c.z + off};
   for (int x : v)
     if (x < 0 || x >= lim) return nullptr;
-  return coarse_.find((std::uint64_t(v[0]) << 32) | (std::uint64_t(v[1]) << 16) |
-                      std::uint64_t(v[2]));
+  return coarse_.value_or(
+      (std::uint64_t(v[0]) << 32) | (std::uint64_t(v[1]) << 16) | std::uint64_t(v[2]), nullptr);
 }
 
 SemiOcTreeNode* SemiOcTree::create_coarse(const CoarseIndex& c, Label label) {
@@ -251,9 +251,10 @@ SemiOcTreeNode* SemiOcTree::create_coarse(const CoarseIndex& c, Label label) {
   node->set_label(label);
   node->setLogOdds(log_odds_for(label));
   node->flags_ |= SemiOcTreeNode::kCoarseRoot;
-  coarse_.insert(pack(octomap::OcTreeKey(key.k[0] >> coarse_level_, key.k[1] >> coarse_level_,
-                                         key.k[2] >> coarse_level_)),
-                 node);
+  coarse_.insert_or_assign(
+      pack(octomap::OcTreeKey(key.k[0] >> coarse_level_, key.k[1] >> coarse_level_,
+                              key.k[2] >> coarse_level_)),
+      node);
   size_changed = true;
   return node;
 }
@@ -461,9 +462,10 @@ void SemiOcTree::compact() {
 void SemiOcTree::mark_coarse_recurs(SemiOcTreeNode* node, unsigned depth, octomap::OcTreeKey key) {
   if (depth == coarse_depth()) {
     node->flags_ |= SemiOcTreeNode::kCoarseRoot;
-    coarse_.insert(pack(octomap::OcTreeKey(key.k[0] >> coarse_level_, key.k[1] >> coarse_level_,
-                                           key.k[2] >> coarse_level_)),
-                   node);
+    coarse_.insert_or_assign(
+        pack(octomap::OcTreeKey(key.k[0] >> coarse_level_, key.k[1] >> coarse_level_,
+                                key.k[2] >> coarse_level_)),
+        node);
     return;
   }
   node->flags_ &= static_cast<std::uint8_t>(~SemiOcTreeNode::kCoarseRoot);

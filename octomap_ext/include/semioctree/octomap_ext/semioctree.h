@@ -18,8 +18,8 @@
 #include <string>
 #include <vector>
 
-#include "semioctree/octomap_ext/coarse_table.h"
 #include "semioctree/octomap_ext/labels.h"
+#include "semioctree/octomap_ext/packed_key_map.h"
 #include "semioctree/octomap_ext/semioctree_node.h"
 
 namespace semioctree {
@@ -215,7 +215,7 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
 
   unsigned coarse_level_ = 0;
   // Packed (key >> k) of each coarse voxel → its node.
-  CoarseTable<SemiOcTreeNode> coarse_;
+  PackedKeyMap<SemiOcTreeNode*, 50> coarse_;  // packed coarse index → node
 };
 
 // Thrown for malformed tree data (bad magic, truncation, hash mismatch, ...).

@@ -212,8 +212,9 @@ TraversalEnd SemiOcTree::traverse_impl(const Point3& a, const Point3& b, Visitor
     }
     // O(1) access to the coarse voxel through the hashed grid.
     const SemiOcTreeNode* node =
-        coarse_.find((std::uint64_t(key.k[0] >> k) << 32) | (std::uint64_t(key.k[1] >> k) << 16) |
-                     std::uint64_t(key.k[2] >> k));
+        coarse_.value_or((std::uint64_t(key.k[0] >> k) << 32) |
+                             (std::uint64_t(key.k[1] >> k) << 16) | std::uint64_t(key.k[2] >> k),
+                         nullptr);
     const bool split = node && k > 0 && nodeHasChildren(node);
     if (split && (!kMarkedOnly || node->has_flag(SemiOcTreeNode::kMarked))) {
       if (!traverse_children<kMarkedOnly>(f, node, 0, base, t_in, p_in, t_out, p_out, visit))
