@@ -81,6 +81,7 @@ class PackedKeyMap {
     shift_ = 64;
   }
   std::size_t size() const { return size_; }
+  std::size_t capacity() const { return slots_.size(); }  // slots
   std::size_t memory_bytes() const { return slots_.capacity() * sizeof(Slot); }
 
  private:

@@ -1,0 +1,55 @@
+// PackedKeyMap: the open-addressing table behind the coarse grid and the
+// pipeline's cell indexes, checked against std::unordered_map.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <random>
+#include <unordered_map>
+
+#include "semioctree/octomap_ext/packed_key_map.h"
+
+namespace semioctree {
+namespace {
+
+TEST(PackedKeyMap, AgreesWithUnorderedMapThroughGrowth) {
+  PackedKeyMap<std::uint32_t> map;  // starts empty: every slot comes from growth
+  std::unordered_map<std::uint64_t, std::uint32_t> want;
+  std::mt19937_64 rng(7);
+  // Packed-key-like values, many repeated: both new keys and hits.
+  std::uniform_int_distribution<std::uint64_t> cell(0, 50000);
+  for (std::uint32_t i = 0; i < 200000; ++i) {
+    const std::uint64_t key = (cell(rng) << 32) | (cell(rng) & 0xff);
+    const auto got = map.try_emplace(key, i);
+    const auto ref = want.try_emplace(key, i);
+    ASSERT_EQ(got.second, ref.second);
+    ASSERT_EQ(*got.first, ref.first->second);
+  }
+  EXPECT_EQ(map.size(), want.size());
+  for (const auto& [key, value] : want) ASSERT_EQ(map.value_or(key, ~0u), value);
+  EXPECT_EQ(map.find(~std::uint64_t(1)), nullptr);
+  EXPECT_EQ(map.value_or(std::uint64_t(60000) << 32, 123u), 123u);
+  // Never fuller than its bound (75 % by default), so a miss ends at an empty slot.
+  EXPECT_LE(100 * map.size(), 75 * map.capacity());
+}
+
+TEST(PackedKeyMap, InsertOrAssignReplacesAndInsertIsASet) {
+  int a = 0, b = 0;
+  PackedKeyMap<int*, 50> nodes;
+  nodes.insert_or_assign(42, &a);
+  nodes.insert_or_assign(42, &b);
+  EXPECT_EQ(nodes.size(), 1u);
+  EXPECT_EQ(nodes.value_or(42, nullptr), &b);
+  EXPECT_EQ(nodes.value_or(43, nullptr), nullptr);
+  nodes.clear();
+  EXPECT_EQ(nodes.size(), 0u);
+  EXPECT_EQ(nodes.find(42), nullptr);
+
+  PackedKeyMap<std::uint32_t> set(10);
+  EXPECT_TRUE(set.insert(5));
+  EXPECT_FALSE(set.insert(5));
+  EXPECT_TRUE(set.insert(0));  // key 0 is a key like any other
+  EXPECT_EQ(set.size(), 2u);
+}
+
+}  // namespace
+}  // namespace semioctree
