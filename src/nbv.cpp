@@ -50,9 +50,10 @@ bool blind_octant(const Octant& o, unsigned coarse_level, const std::vector<Poin
   };
   if (!blind(o.center)) return false;
   if (o.level >= coarse_level) return true;  // a leaf is judged by its centre
-  // A larger octant by the centres of its corner leaves: the blind zone of one
-  // scan (a ball, a cone) is convex, so they stand for every leaf inside, and an
-  // octant merged from blind leaves (a pruned map) stays blind.
+  // A larger octant by the centres of its corner leaves, so that an octant
+  // merged from blind leaves (a pruned map) stays blind. Exact when one scan's
+  // ball or cone holds all of them (both are convex); across the two, a leaf
+  // in between might not be blind: rare, and only near a past scan position.
   const double leaf = o.size / double(1u << (coarse_level - o.level));
   const double h = 0.5 * (o.size - leaf);
   for (int k = 0; k < 8; ++k) {

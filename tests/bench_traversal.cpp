@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -44,8 +45,9 @@ void occupy_box_surface(SemiOcTree& tree, double x0, double y0, double z0, doubl
 // "walls": the map, occupied leaves on the four walls (floor and
 // ceiling points are removed by preprocessing). "furnished": also floor,
 // ceiling and three pieces of furniture (more split voxels, a harder case).
-SemiOcTree build_room(double leaf, double coarse, bool furnished) {
-  SemiOcTree tree(leaf, coarse);
+std::unique_ptr<SemiOcTree> build_room(double leaf, double coarse, bool furnished) {
+  auto room = std::make_unique<SemiOcTree>(leaf, coarse);
+  SemiOcTree& tree = *room;
   const double L = tree.coarse_size();
   // Coarse voxels over the room and one voxel around it, all empty.
   for (int i = -1; i * L < 10.0 + L; ++i)
@@ -62,7 +64,7 @@ SemiOcTree build_room(double leaf, double coarse, bool furnished) {
     occupy_box_surface(tree, 6.0, 1.0, 0.0, 7.0, 5.0, 2.0);
     occupy_box_surface(tree, 4.5, 6.0, 0.0, 5.0, 6.5, 3.0);
   }
-  return tree;
+  return room;
 }
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -102,7 +104,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   const bool furnished = map == "furnished";
   std::fprintf(stderr, "building the room map ...\n");
-  SemiOcTree semi = build_room(0.05, 0.8, furnished);
+  const auto room = build_room(0.05, 0.8, furnished);
+  SemiOcTree& semi = *room;
   semi.prune();
   semi.compact();
   const auto octo = semioctree::to_occupancy_octree(semi);

@@ -46,7 +46,8 @@ TEST(Cli, VersionAndHelp) {
 
 TEST(Cli, InfoDescribesASemiOcTree) {
   const auto dir = testing::temp_dir("cli-info");
-  const SemiOcTree t = testing::sample_tree();
+  const auto t_tree = testing::sample_tree();
+  const SemiOcTree& t = *t_tree;
   const fs::path ot = dir / "map.ot";
   write_tree_file(t, ot.string());
   const CliRun r = run_cli("info " + ot.string());
@@ -64,7 +65,8 @@ TEST(Cli, InfoDescribesASemiOcTree) {
 
 TEST(Cli, ExportWritesFilesThatReadBack) {
   const auto dir = testing::temp_dir("cli-export");
-  const SemiOcTree t = testing::sample_tree();
+  const auto t_tree = testing::sample_tree();
+  const SemiOcTree& t = *t_tree;
   const fs::path ot = dir / "map.ot";
   write_tree_file(t, ot.string());
   const CliRun r =
@@ -93,7 +95,8 @@ TEST(Cli, BadInputGivesAClearErrorAndNonZeroExit) {
   EXPECT_NE(junk.all().find("junk.ot"), std::string::npos) << junk.all();
 
   // export needs a SemiOcTree and at least one output.
-  const SemiOcTree t = testing::sample_tree();
+  const auto t_tree = testing::sample_tree();
+  const SemiOcTree& t = *t_tree;
   write_tree_file(t, (dir / "map.ot").string());
   const CliRun nothing = run_cli("export " + (dir / "map.ot").string());
   EXPECT_NE(nothing.exit_code, 0);

@@ -115,7 +115,8 @@ std::vector<std::vector<Rgb>> read_png(const std::string& path) {
 }
 
 TEST(SliceImage, ShowsEachLabelInItsColourAndTheScanner) {
-  const SemiOcTree t = testing::sample_tree();
+  const auto t_tree = testing::sample_tree();
+  const SemiOcTree& t = *t_tree;
   const auto dir = testing::temp_dir("slice");
   SliceOptions o;
   o.height = 0.125;  // through the door leaf, the occluded octants and the wall

@@ -42,7 +42,8 @@ std::map<Id, Label> labelled_octants(const SemiOcTree& t) {
 }
 
 TEST(Export, ColorTreeHasEveryLabelledOctantInItsColour) {
-  const SemiOcTree t = testing::sample_tree();
+  const auto t_tree = testing::sample_tree();
+  const SemiOcTree& t = *t_tree;
   const auto color = to_color_octree(t);
   const auto leaves = leaves_by_id(*color);
   std::size_t labelled = 0;
@@ -67,7 +68,8 @@ TEST(Export, ColorTreeHasEveryLabelledOctantInItsColour) {
 }
 
 TEST(Export, OccupancyTreeMapsLabels) {
-  const SemiOcTree t = testing::sample_tree();
+  const auto t_tree = testing::sample_tree();
+  const SemiOcTree& t = *t_tree;
   const auto occ = to_occupancy_octree(t);
   const auto leaves = leaves_by_id(*occ);
   for (const auto& [id, label] : labelled_octants(t)) {
@@ -106,7 +108,8 @@ TEST(Export, OccupancyTreeMapsLabels) {
 }
 
 TEST(Export, PlyHasOneVertexPerLabelledOctant) {
-  const SemiOcTree t = testing::sample_tree();
+  const auto t_tree = testing::sample_tree();
+  const SemiOcTree& t = *t_tree;
   const auto dir = testing::temp_dir("ply");
   const fs::path ply = dir / "octants.ply";
   const std::size_t n = write_octant_ply(t, ply.string());
@@ -162,7 +165,8 @@ bool have_octomap_tools() {
 
 TEST(OctomapTools, ConvertOctreeReadsOurColorTreeAndBt) {
   if (!have_octomap_tools()) GTEST_SKIP() << "octomap-tools not installed";
-  const SemiOcTree t = testing::sample_tree();
+  const auto t_tree = testing::sample_tree();
+  const SemiOcTree& t = *t_tree;
   const auto dir = testing::temp_dir("tools");
   const auto color = to_color_octree(t);
   write_tree_file(*color, (dir / "labels_color.ot").string());
@@ -196,7 +200,8 @@ TEST(OctomapTools, ConvertOctreeReadsOurColorTreeAndBt) {
 
 TEST(OctomapTools, Bt2VrmlDrawsOneBoxPerOccupiedLeaf) {
   if (!have_octomap_tools()) GTEST_SKIP() << "octomap-tools not installed";
-  const SemiOcTree t = testing::sample_tree();
+  const auto t_tree = testing::sample_tree();
+  const SemiOcTree& t = *t_tree;
   const auto dir = testing::temp_dir("vrml");
   const fs::path bt = dir / "occupancy.bt";
   write_binary_file(*to_occupancy_octree(t), bt.string());

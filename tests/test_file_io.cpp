@@ -32,7 +32,8 @@ struct SampleFiles {
 SampleFiles write_samples(const std::string& name) {
   SampleFiles f;
   f.dir = testing::temp_dir(name);
-  const SemiOcTree t = testing::sample_tree();
+  const auto t_tree = testing::sample_tree();
+  const SemiOcTree& t = *t_tree;
   f.semi = f.dir / "semioctree.ot";
   f.color = f.dir / "labels_color.ot";
   f.bt = f.dir / "occupancy.bt";
@@ -56,7 +57,8 @@ void expect_error_naming(const fs::path& p, const char* what_part = nullptr) {
 
 TEST(FileIo, ReadsEachTypeBack) {
   const auto f = write_samples("types");
-  const SemiOcTree t = testing::sample_tree();
+  const auto t_tree = testing::sample_tree();
+  const SemiOcTree& t = *t_tree;
   auto semi = read_tree_file(f.semi.string());
   EXPECT_EQ(semi.type, "SemiOcTree");
   EXPECT_FALSE(semi.binary);
@@ -125,7 +127,8 @@ TEST(FileIo, TruncationsAreRejected) {
 TEST(FileIo, ByteFlipsAreRejectedOrHarmless) {
   const auto f = write_samples("flip");
   std::mt19937 rng(9);
-  const SemiOcTree original = testing::sample_tree();
+  const auto original_tree = testing::sample_tree();
+  const SemiOcTree& original = *original_tree;
   std::map<std::tuple<unsigned, unsigned, unsigned, unsigned>, Label> want;
   original.for_each_octant([&](const Octant& o) {
     want[{o.key.k[0], o.key.k[1], o.key.k[2], o.level}] = o.label();
@@ -163,7 +166,8 @@ TEST(FileIo, ByteFlipsAreRejectedOrHarmless) {
 }
 
 TEST(FileIo, WriteToUnwritablePlaceIsAClearError) {
-  const SemiOcTree t = testing::sample_tree();
+  const auto t_tree = testing::sample_tree();
+  const SemiOcTree& t = *t_tree;
   try {
     write_tree_file(t, "/nonexistent/dir/out.ot");
     FAIL();

@@ -44,11 +44,36 @@ TEST(PackedKeyMap, InsertOrAssignReplacesAndInsertIsASet) {
   EXPECT_EQ(nodes.size(), 0u);
   EXPECT_EQ(nodes.find(42), nullptr);
 
+  nodes.insert_or_assign(42, &a);  // usable again after clear()
+  EXPECT_EQ(nodes.value_or(42, nullptr), &a);
+
   PackedKeyMap<std::uint32_t> set(10);
+  const std::size_t reserved = set.capacity();
   EXPECT_TRUE(set.insert(5));
   EXPECT_FALSE(set.insert(5));
   EXPECT_TRUE(set.insert(0));  // key 0 is a key like any other
   EXPECT_EQ(set.size(), 2u);
+  for (std::uint64_t k = 100; k < 100 + 4 * reserved; ++k) EXPECT_TRUE(set.insert(k));
+  EXPECT_GT(set.capacity(), reserved);  // grew past what was reserved, keeping every key
+  EXPECT_FALSE(set.insert(5));
+  EXPECT_FALSE(set.insert(0));
+  EXPECT_EQ(set.size(), 2 + 4 * reserved);
+}
+
+// A lookup of a key already there never grows the table: pointers into it
+// stay valid, even when the table is full up to its bound.
+TEST(PackedKeyMap, FindingAnExistingKeyDoesNotMoveValues) {
+  PackedKeyMap<std::uint32_t> map;
+  std::uint64_t k = 0;
+  while (100 * (map.size() + 1) <= 75 * std::max<std::size_t>(map.capacity(), 1) || map.size() == 0)
+    map.try_emplace(k++, 7);
+  const std::size_t capacity = map.capacity();
+  const std::uint32_t* first = map.find(0);
+  const auto again = map.try_emplace(0, 9);
+  EXPECT_FALSE(again.second);
+  EXPECT_EQ(again.first, first);
+  EXPECT_EQ(*again.first, 7u);
+  EXPECT_EQ(map.capacity(), capacity);
 }
 
 }  // namespace

@@ -35,8 +35,8 @@
 // a cone under every past scan position (and a small sphere around it)
 // `occluded` although nothing hides it: it is unobserved, not shadowed, and
 // the robot itself stood there. Rule: an occluded octant all of whose sample
-// points (the centre; for octants above the leaf also the 8 corners pulled in
-// by 2 % — the points the occlusion study judged it by) lie in the blind zone
+// points (the centre; for octants above the leaf also the centres of its 8
+// corner leaves, so that a merged octant is judged as its leaves were) lie in the blind zone
 // (elevation below the minimum, or closer than the minimum range) of some past
 // scan position is not an obstacle for the cylinder. Occupied space is always
 // an obstacle, and occluded space with any sample outside every blind zone

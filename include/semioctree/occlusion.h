@@ -44,9 +44,9 @@ struct OcclusionParams {
   OcclusionScope scope = OcclusionScope::kAll;
   // Worker threads (0: one per core); the result is the same for any count.
   unsigned threads = 0;
-  // Afterwards merge the siblings left with one label (SemiOcTree::prune): a
-  // split whose children all got the same verdict is undone, so the result is
-  // the same map whatever subdivision the study started from.
+  // Afterwards merge the siblings left with one label (SemiOcTree::prune):
+  // labels and volumes are unchanged, in fewer octants. (The NBV scores count
+  // per octant, so they see the merged octants.)
   bool prune = true;
 };
 
@@ -54,7 +54,7 @@ struct OcclusionReport {
   std::size_t octants_tested = 0;
   std::size_t octants_split = 0;
   std::size_t segments = 0;                      // segments cast
-  std::size_t empty = 0, occluded = 0, out = 0;  // leaf octants labelled
+  std::size_t empty = 0, occluded = 0, out = 0;  // leaf octants labelled (before merging)
 };
 
 // How well `p` is seen from the best of `views`.

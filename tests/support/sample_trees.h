@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <random>
 #include <string>
 
@@ -12,8 +13,9 @@ namespace semioctree::testing {
 // A 3 × 2 × 2 block of coarse voxels (L = 0.4, r = 0.05): walls of occupied
 // leaves at x ≈ 0, empty and occluded space, a door, a window, out, a scan
 // position and an NBV, at several levels.
-inline SemiOcTree sample_tree() {
-  SemiOcTree t(0.05, 0.4);
+inline std::unique_ptr<SemiOcTree> sample_tree() {
+  auto tree = std::make_unique<SemiOcTree>(0.05, 0.4);
+  SemiOcTree& t = *tree;
   for (int x = 0; x < 3; ++x)
     for (int y = 0; y < 2; ++y)
       for (int z = 0; z < 2; ++z) t.create_coarse({x, y, z}, Label::kEmpty);
@@ -34,7 +36,7 @@ inline SemiOcTree sample_tree() {
   t.set_label(key(0.6, 0.6, 0.3), leaf, Label::kScan);
   t.set_label(key(0.7, 0.5, 0.3), leaf, Label::kNbv);
   t.set_label(key(0.9, 0.5, 0.5), 1, Label::kUnknown);
-  return t;
+  return tree;
 }
 
 // A fresh empty directory under the system temp dir.

@@ -5,8 +5,10 @@
 // two, not a modulo by a prime and a pointer chase as in std::unordered_map.
 #pragma once
 
+#include <cassert>
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -17,19 +19,21 @@ namespace semioctree {
 template <class Value, unsigned kMaxLoadPercent = 75>
 class PackedKeyMap {
   static_assert(kMaxLoadPercent > 0 && kMaxLoadPercent < 100, "load must be in (0, 100) %");
+  static_assert(!std::is_same_v<Value, bool>, "std::vector<bool> has no addressable values");
 
  public:
-  static constexpr std::uint64_t kNoKey = ~std::uint64_t(0);  // never a packed key
+  // Marks a free slot, so it is not a key (no packed key uses all 64 bits).
+  static constexpr std::uint64_t kNoKey = ~std::uint64_t(0);
 
   // Sized for `expected` keys without growing.
   explicit PackedKeyMap(std::size_t expected = 0) { reserve(expected); }
 
   const Value* find(std::uint64_t key) const {
-    if (slots_.empty()) return nullptr;
-    for (std::size_t i = slot_of(key);; i = (i + 1) & (slots_.size() - 1)) {
-      const Slot& s = slots_[i];
-      if (s.key == key) return &s.value;
-      if (s.key == kNoKey) return nullptr;
+    assert(key != kNoKey);
+    if (keys_.empty()) return nullptr;
+    for (std::size_t i = slot_of(key);; i = (i + 1) & (keys_.size() - 1)) {
+      if (keys_[i] == key) return &values_[i];
+      if (keys_[i] == kNoKey) return nullptr;
     }
   }
   Value value_or(std::uint64_t key, Value fallback) const {
@@ -37,19 +41,20 @@ class PackedKeyMap {
     return v ? *v : fallback;
   }
   // The value stored with `key`, storing `value` first if the key is new;
-  // second: whether it was new.
+  // second: whether it was new. Only an insertion can grow the table (and
+  // move the values).
   std::pair<Value*, bool> try_emplace(std::uint64_t key, const Value& value) {
-    if (100 * (size_ + 1) > kMaxLoadPercent * slots_.size()) reserve(2 * size_ + 1);
-    for (std::size_t i = slot_of(key);; i = (i + 1) & (slots_.size() - 1)) {
-      Slot& s = slots_[i];
-      if (s.key == key) return {&s.value, false};
-      if (s.key == kNoKey) {
-        s.key = key;
-        s.value = value;
-        ++size_;
-        return {&s.value, true};
-      }
+    assert(key != kNoKey);
+    if (!keys_.empty()) {
+      std::size_t i = slot_of(key);
+      for (; keys_[i] != kNoKey; i = (i + 1) & (keys_.size() - 1))
+        if (keys_[i] == key) return {&values_[i], false};
+      if (100 * (size_ + 1) <= kMaxLoadPercent * keys_.size()) return {store(i, key, value), true};
     }
+    reserve(2 * size_ + 1);
+    std::size_t i = slot_of(key);
+    while (keys_[i] != kNoKey) i = (i + 1) & (keys_.size() - 1);
+    return {store(i, key, value), true};
   }
   void insert_or_assign(std::uint64_t key, const Value& value) {
     const auto r = try_emplace(key, value);
@@ -59,41 +64,54 @@ class PackedKeyMap {
   bool insert(std::uint64_t key) { return try_emplace(key, Value{}).second; }
   // Hints the cache to fetch the slot of `key` (loops know their next keys).
   void prefetch(std::uint64_t key) const {
-    if (!slots_.empty()) __builtin_prefetch(&slots_[slot_of(key)]);
+    if (!keys_.empty()) __builtin_prefetch(&keys_[slot_of(key)]);
   }
   // Room for n keys without growing.
   void reserve(std::size_t n) {
     if (n == 0) return;
     std::size_t capacity = 64;
     while (kMaxLoadPercent * capacity < 100 * n) capacity *= 2;
-    if (capacity <= slots_.size()) return;
-    std::vector<Slot> old(capacity);
-    old.swap(slots_);
+    if (capacity <= keys_.size()) return;
+    std::vector<std::uint64_t> old_keys(capacity, kNoKey);
+    std::vector<Value> old_values(capacity);
+    old_keys.swap(keys_);
+    old_values.swap(values_);
     shift_ = 64 - unsigned(__builtin_ctzll(capacity));
-    size_ = 0;
-    for (const Slot& s : old)
-      if (s.key != kNoKey) try_emplace(s.key, s.value);
+    for (std::size_t j = 0; j < old_keys.size(); ++j) {
+      if (old_keys[j] == kNoKey) continue;
+      std::size_t i = slot_of(old_keys[j]);
+      while (keys_[i] != kNoKey) i = (i + 1) & (keys_.size() - 1);
+      keys_[i] = old_keys[j];
+      values_[i] = old_values[j];
+    }
   }
   void clear() {
-    slots_.clear();
-    slots_.shrink_to_fit();
+    keys_ = {};
+    values_ = {};
     size_ = 0;
     shift_ = 64;
   }
   std::size_t size() const { return size_; }
-  std::size_t capacity() const { return slots_.size(); }  // slots
-  std::size_t memory_bytes() const { return slots_.capacity() * sizeof(Slot); }
+  std::size_t capacity() const { return keys_.size(); }  // slots
+  std::size_t memory_bytes() const {
+    return keys_.capacity() * sizeof(std::uint64_t) + values_.capacity() * sizeof(Value);
+  }
 
  private:
-  struct Slot {
-    std::uint64_t key = kNoKey;
-    Value value{};
-  };
   std::size_t slot_of(std::uint64_t key) const {
     return std::size_t((key * 0x9E3779B97F4A7C15ull) >> shift_);  // Fibonacci hashing
   }
+  Value* store(std::size_t i, std::uint64_t key, const Value& value) {
+    keys_[i] = key;
+    values_[i] = value;
+    ++size_;
+    return &values_[i];
+  }
 
-  std::vector<Slot> slots_;  // a power of two of them
+  // Keys and values apart: a slot costs 8 + sizeof(Value) bytes, not a padded
+  // pair, and probes read only keys.
+  std::vector<std::uint64_t> keys_;  // a power of two of them; kNoKey: free
+  std::vector<Value> values_;
   unsigned shift_ = 64;
   std::size_t size_ = 0;
 };

@@ -95,6 +95,10 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
   // A tree with k = 0 (coarse voxel = leaf). Needed by OctoMap's factory.
   explicit SemiOcTree(double leaf_size);
   ~SemiOcTree() override = default;
+  // OctoMap's copy would share the coarse index's node pointers with the
+  // source (and drop the labels): not copyable.
+  SemiOcTree(const SemiOcTree&) = delete;
+  SemiOcTree& operator=(const SemiOcTree&) = delete;
 
   // k such that coarse = leaf·2^k; throws std::invalid_argument otherwise.
   static unsigned coarse_level_for(double leaf_size, double coarse_size);
