@@ -7,21 +7,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <limits>
 #include <string>
 #include <vector>
 
 #include "semioctree/discretize.h"
 #include "semioctree/preprocess.h"
+#include "support/bench_common.h"
 #include "support/lab_scan.h"
 
 using namespace semioctree;
-
-namespace {
-double since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -29,10 +23,7 @@ int main(int argc, char** argv) {
       "at 0.8 -> 0.05 m, the semioctree against the homogeneous grid over the same region, in "
       "one run. Prints JSON on stdout, progress on stderr."};
   int rounds = 3;
-  app.add_option("--rounds", rounds,
-                 "number of timed rounds; the best (shortest) round of each method is reported")
-      ->check(CLI::Range(1, std::numeric_limits<int>::max(), "POSITIVE"))
-      ->capture_default_str();
+  bench::add_rounds_option(app, rounds);
   CLI11_PARSE(app, argc, argv);
   std::fprintf(stderr, "scanning the lab ...\n");
   const testing::LabScan lab = testing::scan_lab();
@@ -48,19 +39,19 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "round %d ...\n", r + 1);
     auto t0 = std::chrono::steady_clock::now();
     const PreprocessResult pre = preprocess(cloud, pp);
-    pre_s.push_back(since(t0));
+    pre_s.push_back(bench::seconds_since(t0));
     kept = pre.output_points;
     t0 = std::chrono::steady_clock::now();
     {
       const auto semi = discretize(*pre.cloud, pre.ceiling_height, {0.05, 0.8, 0.8});
-      semi_s.push_back(since(t0));
+      semi_s.push_back(bench::seconds_since(t0));
       semi_octants = semi->statistics().total();
       semi_mem = semi->memory_bytes();
     }
     t0 = std::chrono::steady_clock::now();
     {
       const auto homo = discretize(*pre.cloud, pre.ceiling_height, {0.05, 0.05, 0.8});
-      homo_s.push_back(since(t0));
+      homo_s.push_back(bench::seconds_since(t0));
       homo_octants = homo->statistics().total();
       homo_mem = homo->memory_bytes();
     }

@@ -39,15 +39,12 @@
 #include "semioctree/octomap_ext/export.h"
 #include "semioctree/openings.h"
 #include "semioctree/preprocess.h"
+#include "support/bench_common.h"
 #include "support/lab_scan.h"
 
 using namespace semioctree;
 
 namespace {
-
-double since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 std::unique_ptr<SemiOcTree> classified_map(const PreprocessResult& pre, const Point3& origin,
                                            double coarse, double* seconds) {
@@ -57,7 +54,7 @@ std::unique_ptr<SemiOcTree> classified_map(const PreprocessResult& pre, const Po
   label_openings(*tree, openings);
   study_occlusion(*tree, {ScannerView{origin}});
   tree->compact();
-  *seconds = since(t0);
+  *seconds = bench::seconds_since(t0);
   return tree;
 }
 
@@ -173,7 +170,7 @@ int main(int argc, char** argv) {
   ScoringStats semi_sub_stats;
   const std::vector<double> semi_sub_scores =
       score_positions(*semi, semi_sub, params, &semi_sub_stats);
-  const double semi_sub_s = since(t_sub);
+  const double semi_sub_s = bench::seconds_since(t_sub);
   // Method 2 on the same subset, at level 2 (0.2 m cells).
   NbvParams m2 = params;
   m2.method = 2;
@@ -181,14 +178,14 @@ int main(int argc, char** argv) {
   ScoringStats m2_stats;
   t_sub = std::chrono::steady_clock::now();
   const std::vector<double> m2_scores = score_positions(*semi, semi_sub, m2, &m2_stats);
-  const double m2_sub_s = since(t_sub);
+  const double m2_sub_s = bench::seconds_since(t_sub);
   // Method 3 (frontier surface) on all candidates, against method 1's scoring.
   NbvParams m3 = params;
   m3.method = 3;
   ScoringStats m3_stats;
   t_sub = std::chrono::steady_clock::now();
   score_positions(*semi, semi_positions, m3, &m3_stats);
-  const double m3_s = since(t_sub);
+  const double m3_s = bench::seconds_since(t_sub);
   std::size_t m2_best = 0, m1_best = 0;
   for (std::size_t i = 0; i < semi_sub.size(); ++i) {
     if (m2_scores[i] > m2_scores[m2_best]) m2_best = i;
@@ -203,20 +200,20 @@ int main(int argc, char** argv) {
   CandidateReport homo_rep;
   const std::vector<Point3> homo_positions =
       find_candidates(*homo, robot, origin, {origin}, params, &homo_rep);
-  const double homo_candidates_s = since(t0);
+  const double homo_candidates_s = bench::seconds_since(t0);
   const std::vector<Point3> homo_sub = subset(homo_positions, subset_size);
   t0 = std::chrono::steady_clock::now();
   ScoringStats homo_stats;
   score_positions(*homo, homo_sub, params, &homo_stats);
   const std::size_t homo_targets = homo_stats.targets, homo_segments = homo_stats.segments;
-  const double homo_sub_s = since(t0);
+  const double homo_sub_s = bench::seconds_since(t0);
   const double homo_scoring_s =
       homo_sub.empty() ? 0 : homo_sub_s * double(homo_positions.size()) / double(homo_sub.size());
 
   std::fprintf(stderr, "OctoMap castRay scoring (subset) ...\n");
   t0 = std::chrono::steady_clock::now();
   const auto occupancy = to_occupancy_octree(*semi);
-  const double octo_build_s = since(t0);
+  const double octo_build_s = bench::seconds_since(t0);
   CastRayScorer scorer{*semi, *occupancy, {}, {}, params.limits};
   semi->for_each_octant([&](const Octant& oc) {
     if (oc.label() != Label::kOccluded) return;
@@ -239,7 +236,7 @@ int main(int argc, char** argv) {
     work();
     for (auto& t : pool) t.join();
   }
-  const double octo_sub_s = since(t0);
+  const double octo_sub_s = bench::seconds_since(t0);
   const double octo_scoring_s =
       semi_sub.empty() ? 0 : octo_sub_s * double(semi_positions.size()) / double(semi_sub.size());
   double max_rel = 0, mean_rel = 0;

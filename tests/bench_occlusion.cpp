@@ -12,21 +12,15 @@
 #include <chrono>
 #include <cstdio>
 #include <ctime>
-#include <limits>
 #include <vector>
 
 #include "semioctree/discretize.h"
 #include "semioctree/occlusion.h"
 #include "semioctree/preprocess.h"
+#include "support/bench_common.h"
 #include "support/lab_scan.h"
 
 using namespace semioctree;
-
-namespace {
-double since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -36,10 +30,7 @@ int main(int argc, char** argv) {
       "JSON on stdout, progress on stderr."};
   int rounds = 2;
   bool semioctree_only = false;  // for profiling: skip the two baselines
-  app.add_option("--rounds", rounds,
-                 "number of timed rounds; the best (shortest) round of each method is reported")
-      ->check(CLI::Range(1, std::numeric_limits<int>::max(), "POSITIVE"))
-      ->capture_default_str();
+  bench::add_rounds_option(app, rounds);
   app.add_flag("--semioctree-only", semioctree_only,
                "time the semioctree alone and skip the homogeneous grid and OctoMap baselines "
                "(for profiling; their JSON fields and the speedups are then 0); default: off");
@@ -64,9 +55,9 @@ int main(int argc, char** argv) {
     {
       auto t = discretize(*pre.cloud, pre.ceiling_height, {0.05, 0.8, 0.8});
       const std::clock_t c1 = std::clock();
-      semi_occupancy_s.push_back(since(t0));
+      semi_occupancy_s.push_back(bench::seconds_since(t0));
       semi_segments = study_occlusion(*t, {view}).segments;
-      semi_s.push_back(since(t0));
+      semi_s.push_back(bench::seconds_since(t0));
       std::fprintf(stderr, "  cpu: occupancy %.3f s, occlusion %.3f s\n",
                    double(c1 - c0) / CLOCKS_PER_SEC, double(std::clock() - c1) / CLOCKS_PER_SEC);
       semi_octants = t->statistics().total();
@@ -77,7 +68,7 @@ int main(int argc, char** argv) {
     {
       auto t = discretize(*pre.cloud, pre.ceiling_height, {0.05, 0.05, 0.8});
       homo_segments = study_occlusion(*t, {view}).segments;
-      homo_s.push_back(since(t0));
+      homo_s.push_back(bench::seconds_since(t0));
       homo_octants = t->statistics().total();
     }
     std::fprintf(stderr, "round %d: OctoMap insertPointCloud ...\n", r + 1);
@@ -86,7 +77,7 @@ int main(int argc, char** argv) {
       octomap::OcTree t(0.05);
       t.insertPointCloud(octo_cloud,
                          octomap::point3d(float(origin.x()), float(origin.y()), float(origin.z())));
-      octo_s.push_back(since(t0));
+      octo_s.push_back(bench::seconds_since(t0));
       octo_nodes = t.size();
     }
   }

@@ -19,6 +19,7 @@
 
 #include "semioctree/octomap_ext/export.h"
 #include "semioctree/octomap_ext/semioctree.h"
+#include "support/bench_common.h"
 
 using semioctree::Label;
 using semioctree::Point3;
@@ -67,10 +68,6 @@ std::unique_ptr<SemiOcTree> build_room(double leaf, double coarse, bool furnishe
   return room;
 }
 
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -88,10 +85,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1LL, std::numeric_limits<long long>::max(), "POSITIVE"))
       ->capture_default_str();
   app.add_option("--seed", seed, "seed of the random segment end points")->capture_default_str();
-  app.add_option("--rounds", rounds,
-                 "number of timed rounds; the best (shortest) round of each method is reported")
-      ->check(CLI::Range(1, std::numeric_limits<int>::max(), "POSITIVE"))
-      ->capture_default_str();
+  semioctree::bench::add_rounds_option(app, rounds);
   app.add_option("--map", map,
                  "room map: walls (occupied leaves on the four walls) or furnished (also floor, "
                  "ceiling and three pieces of furniture: more split voxels)")
@@ -144,7 +138,7 @@ int main(int argc, char** argv) {
       });
       semi_blocked[i] = blocked;
     }
-    semi_rounds.push_back(seconds_since(t0));
+    semi_rounds.push_back(semioctree::bench::seconds_since(t0));
     if (skip_octomap) continue;
     std::fprintf(stderr, "round %d: OctoMap computeRayKeys + search ...\n", round + 1);
     octo_steps = 0;
@@ -164,7 +158,7 @@ int main(int argc, char** argv) {
       }
       octo_blocked[i] = blocked;
     }
-    octo_rounds.push_back(seconds_since(t0));
+    octo_rounds.push_back(semioctree::bench::seconds_since(t0));
   }
   const double semi_s = *std::min_element(semi_rounds.begin(), semi_rounds.end());
   const double octo_s =

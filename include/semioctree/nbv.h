@@ -36,9 +36,9 @@
 // `occluded` although nothing hides it: it is unobserved, not shadowed, and
 // the robot itself stood there. Rule: an occluded octant all of whose sample
 // points (the centre; for octants above the leaf also the centres of its 8
-// corner leaves, so that a merged octant is judged as its leaves were) lie in the blind zone
-// (elevation below the minimum, or closer than the minimum range) of some past
-// scan position is not an obstacle for the cylinder. Occupied space is always
+// corner leaves, so that a merged octant is judged as its leaves were) lie in
+// the blind zone (elevation below the minimum, or closer than the minimum
+// range) of some past scan position is not an obstacle for the cylinder. Occupied space is always
 // an obstacle, and occluded space with any sample outside every blind zone
 // (a real shadow) is too. The blind zone still counts as occluded for the
 // score and the stop percentage.
