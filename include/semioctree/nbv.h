@@ -38,9 +38,9 @@
 // points (the centre; for octants above the leaf also the centres of its 8
 // corner leaves, so that a merged octant is judged as its leaves were) lie in
 // the blind zone (elevation below the minimum, or closer than the minimum
-// range) of some past scan position is not an obstacle for the cylinder. Occupied space is always
-// an obstacle, and occluded space with any sample outside every blind zone
-// (a real shadow) is too. The blind zone still counts as occluded for the
+// range) of some past scan position is not an obstacle for the cylinder.
+// Occupied space is always an obstacle, and occluded space with any sample
+// outside every blind zone (a real shadow) is too. The blind zone still counts as occluded for the
 // score and the stop percentage.
 //
 // Score (Eq 3–4). For a scanner at position p and each occluded target t
