@@ -107,6 +107,7 @@ void write_chart(const std::map<std::string, std::vector<const DiscretizationRun
   }
   img.text(left, 18, "Fig 15: octants needed for a resolution (log scale)", {0, 0, 0});
   img.text(W / 2 - 80, H - 36, "leaf size (resolution)", {0, 0, 0});
+  img.text(8, top - 24, "octants", {0, 0, 0});  // the y axis
   const std::map<std::string, Rgb> colors = {{"homogeneous", {200, 60, 0}},
                                              {"semioctree", {0, 80, 200}}};
   int ly = top + 10;
@@ -118,8 +119,13 @@ void write_chart(const std::map<std::string, std::vector<const DiscretizationRun
     for (const auto* r : runs) {
       const int x = X(r->leaf), y = Y(double(r->stats.total()));
       img.fill_rect(x - 5, y - 5, x + 6, y + 6, c);
+      // The curves rise to the right: the upper curve's labels go above-left
+      // of its points, the lower one's below-right, both clear of the lines.
       const std::string n = std::to_string(r->stats.total());
-      img.text(x + 10, y - (m == "semioctree" ? -8 : 20), n, c);
+      if (m == "semioctree")
+        img.text(x + 10, y + 8, n, c);
+      else
+        img.text(x - 10 - Raster::text_width(n), y - 22, n, c);
     }
     img.fill_rect(left + 30, ly, left + 50, ly + 14, c);
     img.text(left + 60, ly, m, {0, 0, 0});

@@ -1,6 +1,7 @@
 #include "semioctree/scan_io.h"
 
 #include <pcl/common/transforms.h>
+#include <pcl/console/print.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
 
@@ -87,10 +88,24 @@ Scan read_pcl(const std::string& path, bool pcd) {
   Scan scan;
   scan.points.reset(new Cloud);
   scan.source = path;
-  const int rc =
-      pcd ? pcl::io::loadPCDFile(path, *scan.points) : pcl::io::loadPLYFile(path, *scan.points);
+  int rc = 0;
+  {
+    // PCL warns on stderr about PLY elements it skips (e.g. its own camera
+    // element); a failure is reported below through rc.
+    const auto saved = pcl::console::getVerbosityLevel();
+    pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+    rc = pcd ? pcl::io::loadPCDFile(path, *scan.points) : pcl::io::loadPLYFile(path, *scan.points);
+    pcl::console::setVerbosityLevel(saved);
+  }
   if (rc < 0)
     throw ScanReadError(path + ": not a readable " + (pcd ? "PCD" : "PLY") + " point cloud");
+  const Eigen::Vector3f origin = scan.points->sensor_origin_.head<3>();
+  const Eigen::Quaternionf q = scan.points->sensor_orientation_;
+  if (!origin.allFinite() || !q.coeffs().allFinite() || q.norm() < 1e-6f)
+    throw ScanReadError(path + ": the file's viewpoint is not a valid pose");
+  scan.pose.scanner_to_survey =
+      Eigen::Translation3d(origin.cast<double>()) * q.normalized().cast<double>();
+  scan.pose_from_file = !scan.pose.scanner_to_survey.isApprox(Eigen::Isometry3d::Identity());
   scan.invalid_dropped = drop_invalid(*scan.points);
   if (scan.points->empty()) throw ScanReadError(path + ": holds no valid points");
   return scan;
@@ -191,6 +206,7 @@ std::vector<Scan> read_ptx(const std::string& path) {
     scan.source = path + "#" + std::to_string(scans.size());
     // PTX stores the matrix transposed: translation in the last row.
     scan.pose.scanner_to_survey.matrix() = m.transpose();
+    scan.pose_from_file = true;
     const std::size_t n = std::size_t(cols) * std::size_t(rows);
     scan.points->reserve(n);
     for (std::size_t i = 0; i < n; ++i) {

@@ -36,9 +36,9 @@ void write_slice_png(const SemiOcTree& tree, const std::string& path, const Slic
                       ? opt.pixels_per_leaf
                       : std::max(1, int(std::lround(1200.0 / double(std::max(nx, ny)))));
   const int map_w = int(nx) * ppl, map_h = int(ny) * ppl;
-  const int margin = 20, title_h = 36, legend_w = 190, bottom = 60;
-  Raster img(map_w + 2 * margin + legend_w, std::max(map_h + title_h + bottom, 420));
-  const int ox = margin, oy = title_h;
+  const int margin = 20, left = 56, title_h = 36, legend_w = 230, bottom = 80;
+  Raster img(map_w + left + margin + legend_w, std::max(map_h + title_h + bottom, 520));
+  const int ox = left, oy = title_h;
   const double r = tree.leaf_size();
   // Pixel of the world point (x, y): y grows upwards in the world, down in the image.
   auto px = [&](double x) { return ox + int(std::lround((x / r - double(min_cell[0])) * ppl)); };
@@ -66,9 +66,39 @@ void write_slice_png(const SemiOcTree& tree, const std::string& path, const Slic
       for (int x = -rad; x <= rad; ++x)
         if (x * x + y * y <= rad * rad) img.set(cx + x, cy + y, c);
   };
+  // A label on a white box beside a disc: scans by their index (scan_NN), the NBV.
+  auto tag = [&](const Point3& p, const std::string& text, Rgb c) {
+    const int x = px(p.x) + std::max(4, ppl * 2) + 3, y = py(p.y) - Raster::text_height() - 2;
+    img.fill_rect(x - 2, y - 2, x + Raster::text_width(text) + 2, y + Raster::text_height() + 2,
+                  {255, 255, 255});
+    img.text(x, y, text, c, 2);
+  };
   for (const Point3& s : opt.scans) disc(s, label_color(Label::kScan));
   if (opt.nbv) disc(*opt.nbv, label_color(Label::kNbv));
+  for (std::size_t i = 0; i < opt.scans.size(); ++i)
+    tag(opt.scans[i], std::to_string(i), label_color(Label::kScan));
+  if (opt.nbv) tag(*opt.nbv, "NBV", label_color(Label::kNbv));
   img.outline_rect(ox - 1, oy - 1, ox + map_w + 1, oy + map_h + 1, {0, 0, 0});
+  // Axes: map coordinates in metres, a tick every 1, 2, 5 or 10 m.
+  const double x_min = double(min_cell[0]) * r, y_min = double(min_cell[1]) * r;
+  const double extent = double(std::max(nx, ny)) * r;
+  double tick = 1.0;
+  for (double t : {2.0, 5.0, 10.0, 20.0})
+    if (extent / tick > 15) tick = t;
+  for (double x = std::ceil(x_min / tick) * tick; x <= x_min + double(nx) * r + 1e-9; x += tick) {
+    const int X = px(x);
+    img.fill_rect(X, oy + map_h + 1, X + 1, oy + map_h + 6, {0, 0, 0});
+    char t[16];
+    std::snprintf(t, sizeof t, "%g", std::abs(x) < 1e-9 ? 0.0 : x);  // never "-0"
+    img.text(X - Raster::text_width(t) / 2, oy + map_h + 9, t, {0, 0, 0}, 2);
+  }
+  for (double y = std::ceil(y_min / tick) * tick; y <= y_min + double(ny) * r + 1e-9; y += tick) {
+    const int Y = py(y);
+    img.fill_rect(ox - 6, Y, ox - 1, Y + 1, {0, 0, 0});
+    char t[16];
+    std::snprintf(t, sizeof t, "%g", std::abs(y) < 1e-9 ? 0.0 : y);
+    img.text(ox - 9 - Raster::text_width(t), Y - Raster::text_height() / 2, t, {0, 0, 0}, 2);
+  }
 
   // Title.
   char buf[200];
@@ -80,12 +110,12 @@ void write_slice_png(const SemiOcTree& tree, const std::string& path, const Slic
   double bar_m = 0.5;
   for (double m : {1.0, 2.0, 5.0, 10.0})
     if (m / r * ppl <= map_w / 4.0) bar_m = m;
-  const int bar_px = int(std::lround(bar_m / r * ppl)), by = oy + map_h + 25;
+  const int bar_px = int(std::lround(bar_m / r * ppl)), by = oy + map_h + 48;
   img.fill_rect(ox, by, ox + bar_px, by + 6, {0, 0, 0});
   for (int i = 0; i <= 1; ++i)
     img.fill_rect(ox + i * bar_px - (i ? 2 : 0), by - 5, ox + i * bar_px + (i ? 0 : 2), by + 11,
                   {0, 0, 0});
-  std::snprintf(buf, sizeof(buf), "%g m", bar_m);
+  std::snprintf(buf, sizeof(buf), "%g m      axes: x, y in m (map frame)", bar_m);
   img.text(ox + bar_px + 10, by - 4, buf, {0, 0, 0}, 2);
   // Legend.
   const int lx = ox + map_w + 20;
@@ -100,6 +130,16 @@ void write_slice_png(const SemiOcTree& tree, const std::string& path, const Slic
   img.fill_rect(lx, ly, lx + 22, ly + 18, {235, 235, 235});
   img.outline_rect(lx, ly, lx + 22, ly + 18, {0, 0, 0});
   img.text(lx + 30, ly + 2, "not mapped", {0, 0, 0}, 2);
+  // The disc of `occluded` around a scan position is not a shadow: the scanner
+  // measures nothing closer than its minimum range (nor below its lowest
+  // elevation) until another scan sees that space.
+  ly += 40;
+  for (const char* line :
+       {"Black dots: scans (index as", "in scan_NN); red: the NBV.", "The occluded disc around a",
+        "scan is its blind zone", "(closer than the minimum", "range), not a shadow."}) {
+    img.text(lx, ly, line, {0, 0, 0}, 1);
+    ly += 12;
+  }
   img.write_png(path);
 }
 

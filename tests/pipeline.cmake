@@ -1,5 +1,5 @@
 # Tests of the pipeline stages (include/semioctree/, src/).
-foreach(t test_preprocess test_scan_io test_discretize test_occlusion test_update)
+foreach(t test_preprocess test_scan_io test_discretize test_occlusion test_update test_outputs)
   if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/${t}.cpp)
     semioctree_add_test(${t} SOURCES ${t}.cpp LIBS semioctree)
     target_include_directories(${t} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})

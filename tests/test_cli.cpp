@@ -124,7 +124,14 @@ TEST(Cli, DiscretizeWritesEveryFile) {
   EXPECT_EQ(tree->coarse_level(), 3u);
   std::ifstream js(dir / "out" / "stats.json");
   const auto j = nlohmann::json::parse(js);
-  EXPECT_EQ(j["octants"].get<std::uint64_t>(), tree->statistics().total());
+  // The file is the map of stats.json plus the scan marker, 3×3×3 leaves around
+  // the scanner (splitting at most 3 levels above each of them).
+  const auto st = tree->statistics();
+  const auto octants = j["octants"].get<std::uint64_t>();
+  EXPECT_EQ(st.with_label(Label::kScan), 27u);
+  EXPECT_EQ(tree->find_octant(Point3(3.0, 2.0, 1.5))->label(), Label::kScan);
+  EXPECT_GE(st.total(), octants);
+  EXPECT_LE(st.total(), octants + 27 * 3 * 7);
   EXPECT_GT(j["volume_percent"]["occupied"].get<double>(), 0.0);
   // A bad coarse size is refused before anything is read.
   const CliRun bad = run_cli("discretize --cloud " + (dir / "room.pcd").string() +

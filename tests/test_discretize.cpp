@@ -126,9 +126,10 @@ TEST(SliceImage, ShowsEachLabelInItsColourAndTheScanner) {
   const auto img = read_png((dir / "s.png").string());
   ASSERT_FALSE(img.empty());
   // Points are octant centres, away from the outlines.
-  // Map: 3 × 2 coarse voxels of 8 leaves, 10 px per leaf → 240 × 160 px at (20, 36).
+  // Map: 3 × 2 coarse voxels of 8 leaves, 10 px per leaf → 240 × 160 px at (56, 36)
+  // (left of it the y axis's labels).
   auto at = [&](double x, double y) {
-    return img[std::size_t(36 + 160 - int(y / 0.05 * 10))][std::size_t(20 + int(x / 0.05 * 10))];
+    return img[std::size_t(36 + 160 - int(y / 0.05 * 10))][std::size_t(56 + int(x / 0.05 * 10))];
   };
   auto same = [](Rgb a, Rgb b) { return a.r == b.r && a.g == b.g && a.b == b.b; };
   EXPECT_TRUE(same(at(0.025, 0.325), label_color(Label::kOccupied)));  // inside a wall leaf

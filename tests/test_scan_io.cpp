@@ -32,6 +32,32 @@ TEST(ScanIo, ReadsPcdAndPlyDroppingInvalidPoints) {
   }
 }
 
+TEST(ScanIo, PcdViewpointIsTheScanPose) {
+  const auto dir = testing::temp_dir("scanio-vp");
+  Cloud c;
+  c.push_back(pcl::PointXYZ{1.f, 0.f, 0.f});
+  const Eigen::Vector4f origin(2.f, -3.f, 1.5f, 0.f);
+  const Eigen::Quaternionf q(Eigen::AngleAxisf(float(30 * M_PI / 180), Eigen::Vector3f::UnitZ()));
+  pcl::io::savePCDFileBinary((dir / "plain.pcd").string(), c);
+  c.sensor_origin_ = origin;  // PCD VIEWPOINT
+  c.sensor_orientation_ = q;
+  pcl::io::savePCDFileBinary((dir / "posed.pcd").string(), c);
+  const Scan posed = read_scans((dir / "posed.pcd").string()).at(0);
+  EXPECT_TRUE(posed.pose_from_file);
+  EXPECT_NEAR(posed.pose.position().x(), 2.0, 1e-6);
+  EXPECT_NEAR(posed.pose.position().y(), -3.0, 1e-6);
+  EXPECT_NEAR(posed.pose.position().z(), 1.5, 1e-6);
+  EXPECT_NEAR(posed.pose.yaw_deg(), 30.0, 1e-4);
+  // The point (1, 0, 0) of the scanner's frame, in the survey frame.
+  const Cloud::Ptr world = to_survey_frame(posed);
+  EXPECT_NEAR((*world)[0].x, 2.0 + std::cos(M_PI / 6), 1e-5);
+  EXPECT_NEAR((*world)[0].y, -3.0 + std::sin(M_PI / 6), 1e-5);
+  const Scan plain = read_scans((dir / "plain.pcd").string()).at(0);
+  EXPECT_FALSE(plain.pose_from_file);
+  EXPECT_TRUE(plain.pose.scanner_to_survey.isApprox(Eigen::Isometry3d::Identity()));
+  std::filesystem::remove_all(dir);
+}
+
 TEST(ScanIo, ReadsXyzTextWithCommentsAndCommas) {
   const auto dir = testing::temp_dir("xyz");
   std::ofstream(dir / "a.xyz") << "# x y z\n1 2 3\n4,5,6, 0.5\n\n7\t8\t9 10 11 12\nnan 1 1\n";

@@ -102,6 +102,7 @@ TEST(Survey, WritesEveryOutputWithTheDocumentedSchema) {
   EXPECT_DOUBLE_EQ(j["stop_threshold_percent"].get<double>(), 0.1);
   const std::string why = j["stopped_because"];
   EXPECT_TRUE(why == "stop_percentage" || why == "max_scans" || why == "no_candidate") << why;
+  EXPECT_EQ(j["complete"].get<bool>(), why == "stop_percentage");
   ASSERT_GE(j["scans"].size(), 1u);
   ASSERT_LE(j["scans"].size(), 2u);
   for (const json& s : j["scans"]) {
@@ -114,6 +115,8 @@ TEST(Survey, WritesEveryOutputWithTheDocumentedSchema) {
       EXPECT_TRUE(s["seconds"].contains(k)) << k;
     for (const char* k : {"empty", "occupied", "occluded", "door", "window", "out"})
       EXPECT_TRUE(s["volume_percent"].contains(k)) << k;
+    // Eq 5 is measured from the NBV: no NBV, no stop percentage.
+    EXPECT_EQ(s["stop_percent"].is_null(), s["nbv"].is_null());
     EXPECT_GT(s["octants"]["total"].get<double>(), 1000);
     EXPECT_GT(s["octants"]["by_label"]["occupied"].get<double>(), 100);
     EXPECT_GT(s["points_raw"].get<double>(), s["points_kept"].get<double>());
@@ -129,6 +132,62 @@ TEST(Survey, WritesEveryOutputWithTheDocumentedSchema) {
   EXPECT_GT(j["coverage"]["reference_points"].get<double>(), 1000);
   EXPECT_GT(j["coverage"]["percent"].get<double>(), 50.0);
   EXPECT_TRUE(j["openings"].is_array());
+}
+
+// `scan` writes each scan in its own frame with the pose as the PCD viewpoint;
+// `nbv` places the scans by those viewpoints without --pose.
+fs::path scan_pcd(const std::string& name, const std::string& at,
+                  const std::string& scene = "box-room") {
+  const fs::path f = scratch() / (name + ".pcd");
+  const auto r = run_cli("scan --scene " + kScenes + scene + ".scene.json --at " + at +
+                         " --no-intensity --out " + f.string());
+  EXPECT_EQ(r.exit_code, 0) << r.all();
+  return f;
+}
+
+TEST(Nbv, PlacesScansByTheirFileViewpointAndReportsTheNextView) {
+  const fs::path a = scan_pcd("vp_a", "1.0,2.0"), b = scan_pcd("vp_b", "4.6,1.2,20");
+  const fs::path out = scratch() / "nbv_vp";
+  const auto r =
+      run_cli("nbv --cloud " + a.string() + " --cloud " + b.string() + " --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.all();
+  const json j = read_json(out / "survey.json");
+  ASSERT_EQ(j["scans"].size(), 2u);
+  // The survey frame is the files' frame: the poses are the viewpoints.
+  EXPECT_NEAR(j["scans"][0]["pose"]["x"].get<double>(), 1.0, 0.01);
+  EXPECT_NEAR(j["scans"][0]["pose"]["y"].get<double>(), 2.0, 0.01);
+  EXPECT_NEAR(j["scans"][1]["pose"]["x"].get<double>(), 4.6, 0.01);
+  EXPECT_NEAR(j["scans"][1]["pose"]["y"].get<double>(), 1.2, 0.01);
+  EXPECT_NEAR(j["scans"][1]["pose"]["yaw_deg"].get<double>(), 20.0, 0.1);
+  EXPECT_TRUE(j["scans"][1]["registration"].is_null());  // placed, not registered
+  const std::string why = j["stopped_because"];
+  EXPECT_EQ(j["complete"].get<bool>(), why == "stop_percentage");
+  ASSERT_FALSE(j["scans"][1]["nbv"].is_null());
+  EXPECT_GT(j["scans"][1]["stop_percent"].get<double>(), 0.0);
+  for (const char* f : {"semioctree.ot", "labels_color.ot", "occupancy.bt", "slice.png"})
+    EXPECT_TRUE(fs::exists(out / "scan_01" / f)) << f;
+}
+
+TEST(Nbv, FailedRegistrationStillWritesTheSurveyOfTheScansBefore) {
+  // A scan of another building, without its viewpoint: ICP cannot match it to
+  // the first (overlap far below its bound); the command says so, after
+  // writing what it has.
+  const fs::path a = scan_pcd("reg_a", "1.0,2.0"), b = scan_pcd("reg_b", "5.2,3.6", "lab");
+  std::string bytes = testing::slurp(b.string());
+  const std::size_t at = bytes.find("VIEWPOINT ");
+  ASSERT_NE(at, std::string::npos);
+  bytes.replace(at, bytes.find('\n', at) - at, "VIEWPOINT 0 0 0 1 0 0 0");
+  std::ofstream(b, std::ios::binary) << bytes;
+  const fs::path out = scratch() / "nbv_reg";
+  const auto r =
+      run_cli("nbv --cloud " + a.string() + " --cloud " + b.string() + " --out " + out.string());
+  EXPECT_EQ(r.exit_code, 1) << r.all();
+  EXPECT_NE(r.err.find("could not be registered"), std::string::npos) << r.err;
+  const json j = read_json(out / "survey.json");
+  EXPECT_EQ(j["stopped_because"], "registration_failed");
+  EXPECT_FALSE(j["complete"].get<bool>());
+  EXPECT_EQ(j["scans"].size(), 1u);
+  EXPECT_NE(j["error"].get<std::string>().find("could not be registered"), std::string::npos);
 }
 
 // The lab with defaults: stop percentage reached within 5 scans, registration

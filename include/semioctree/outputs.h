@@ -3,7 +3,10 @@
 // occupancy map and the slice image. Each is written atomically.
 #pragma once
 
+#include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "semioctree/octomap_ext/semioctree.h"
 #include "semioctree/scan_io.h"
@@ -18,9 +21,17 @@ struct MapFiles {
   std::string slice = "slice.png";
 };
 
-// Creates `dir` if needed. Throws FileError.
+// Creates `dir` if needed. Throws FileError. The two .ot files carry the
+// markers of DESIGN.md: a cube of 3×3×3 leaves (the scanner's head) labelled
+// `scan` at every position of slice.scans and `nbv` at slice.nbv, so that
+// octovis shows where the scans stood and where to go next. `tree` itself is
+// not changed (the markers go into a copy); occupancy.bt shows them as free.
 void write_map_files(const SemiOcTree& tree, const std::string& dir, const SliceOptions& slice,
                      const MapFiles& names = {});
+
+// A copy of `tree` with those markers (what the .ot files hold).
+std::unique_ptr<SemiOcTree> with_markers(const SemiOcTree& tree, const std::vector<Point3>& scans,
+                                         const std::optional<Point3>& nbv);
 
 // Binary little-endian PLY of the points (x y z as float), written atomically;
 // CloudCompare, PCL and MeshLab read it. Throws FileError.

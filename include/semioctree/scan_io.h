@@ -31,6 +31,9 @@ struct Scan {
   ScanPose pose;
   std::string source;               // file (and scan number for PTX)
   std::size_t invalid_dropped = 0;  // NaN/Inf points and PTX "no return" points
+  // The file gave the pose: a PTX header, or a PCD/PLY viewpoint other than the
+  // identity (PCL's VIEWPOINT / camera element, as `semioctree scan` writes it).
+  bool pose_from_file = false;
 };
 
 // Bad input: the message names the file (and line where it applies).
@@ -39,8 +42,10 @@ class ScanReadError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// By extension (case-insensitive): .pcd, .ply, .xyz/.txt/.asc, .ptx. PCD, PLY
-// and XYZ give one scan with the identity pose; PTX gives one scan per header.
+// By extension (case-insensitive): .pcd, .ply, .xyz/.txt/.asc, .ptx. PCD and
+// PLY give one scan posed by the file's viewpoint (points in the scanner's
+// frame, the viewpoint the scanner's pose: the identity when the file has
+// none); XYZ one scan with the identity pose; PTX one scan per header.
 std::vector<Scan> read_scans(const std::string& path);
 
 // "X,Y,Z,YAW_DEG" (YAW optional) → pose; throws std::invalid_argument.

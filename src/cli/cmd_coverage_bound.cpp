@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "progress_line.h"
 #include "semioctree/sim/coverage.h"
 #include "semioctree/sim/ground_truth.h"
 #include "semioctree/sim/scanner.h"
@@ -69,6 +70,7 @@ void run_coverage_bound(const CoverageBoundArgs& a) {
   so.seed = a.seed;
   so.threads = a.threads;
   so.with_intensity = false;
+  ProgressLine progress(stdout);
   for (std::size_t v = 0; v < positions.size(); ++v) {
     const sim::Scan s =
         sim::scan(truth.ray_caster(), scene.scanner, {positions[v].x(), positions[v].y(), 0.0}, so);
@@ -78,11 +80,11 @@ void run_coverage_bound(const CoverageBoundArgs& a) {
     for (const auto& p : s.points) world.push_back((to_world * p.cast<double>()).cast<float>());
     covered.push_back(sim::covered_samples(ref, world));
     if ((v + 1) % 20 == 0 || v + 1 == positions.size()) {
-      std::printf("\rscanned %zu of %zu positions", v + 1, positions.size());
-      std::fflush(stdout);
+      progress.update("scanned " + std::to_string(v + 1) + " of " +
+                      std::to_string(positions.size()) + " positions");
     }
   }
-  std::printf("\n");
+  progress.finish();
 
   nlohmann::json plans = nlohmann::json::array();
   std::printf("%6s  %14s  %14s\n", "scans", "greedy %", "local search %");

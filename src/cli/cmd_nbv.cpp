@@ -1,8 +1,11 @@
 // `semioctree nbv --cloud FILE... [--pose X,Y,Z,YAW ...] --out DIR`: one map
-// update and next best view for real scans. With poses, each scan is placed by
-// its pose; without, the first scan is at the origin and the others are
-// registered to it by ICP. Writes what a survey writes (survey.json, scan_NN/).
+// update and next best view for real scans. Each scan is placed by its --pose,
+// or by the pose its file carries (PTX header, PCD/PLY viewpoint); otherwise
+// the first scan is at the origin and the others are registered to it by ICP. Writes what a survey
+// writes (survey.json, scan_NN/).
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
@@ -26,6 +29,18 @@ struct NbvOptions {
   ScannerView limits;
 };
 
+// The map takes a scan's position and heading only; preprocessing levels the
+// scan on its floor, so a tilt in its pose is dropped (said, not silent).
+void warn_if_tilted(const Scan& s) {
+  const Eigen::Vector3d up = s.pose.scanner_to_survey.linear() * Eigen::Vector3d::UnitZ();
+  const double tilt_deg = std::acos(std::clamp(up.z(), -1.0, 1.0)) * 180.0 / M_PI;
+  if (tilt_deg > 0.5)
+    std::printf(
+        "  note: the pose of %s is tilted by %.1f°; only its position and heading are "
+        "used (the scan is levelled on its floor)\n",
+        s.source.c_str(), tilt_deg);
+}
+
 void run_nbv(const NbvOptions& o) {
   const auto t_start = std::chrono::steady_clock::now();
   if (!o.poses.empty() && o.poses.size() != o.clouds.size())
@@ -47,8 +62,6 @@ void run_nbv(const NbvOptions& o) {
       scans.push_back(std::move(s));
     }
   }
-  const bool posed =
-      !o.poses.empty() || scans.size() == 1 || o.clouds.size() == 1;  // PTX files carry their poses
   std::unique_ptr<SurveySession> session;
   ScanOutcome last;
   for (std::size_t i = 0; i < scans.size(); ++i) {
@@ -66,6 +79,10 @@ void run_nbv(const NbvOptions& o) {
       }
       session = std::make_unique<SurveySession>(p);
     }
+    // Placed by --pose, by the file (PTX header, PCD/PLY viewpoint), or, for
+    // the first scan, at the origin; any other scan is registered by ICP.
+    const bool posed = !o.poses.empty() || s.pose_from_file || i == 0;
+    if (posed) warn_if_tilted(s);
     IncomingScan in;
     in.points = s.points;
     in.points_raw = s.points->size() + s.invalid_dropped;
@@ -73,7 +90,14 @@ void run_nbv(const NbvOptions& o) {
     in.y = posed ? s.pose.position().y() : 0.0;
     in.yaw_deg = posed ? s.pose.yaw_deg() : 0.0;
     in.registered = !posed;
-    last = session->add_scan(in);
+    try {
+      last = session->add_scan(in);
+    } catch (const RegistrationError& e) {
+      // As the survey does: the map of the scans before is written, with the reason.
+      nlohmann::json extra = {{"inputs", o.clouds}, {"error", e.what()}};
+      session->write_survey_json("registration_failed", extra);
+      throw;
+    }
   }
   std::string why = "stop_percentage";
   if (!last.nbv)
@@ -87,7 +111,7 @@ void run_nbv(const NbvOptions& o) {
   session->write_survey_json(why, extra);
   if (last.nbv)
     std::printf(
-        "next best view: (%.2f, %.2f, %.2f), score %.1f; stop percentage %.3f %% (%s %.3f "
+        "next best view: (%.3f, %.3f, %.3f), score %.1f; stop percentage %.3f %% (%s %.3f "
         "%%)\n",
         last.nbv->position.x, last.nbv->position.y, last.nbv->position.z, last.nbv->score,
         last.stop_percent, last.stop_percent < o.plan.stop ? "below the threshold" : "threshold",
@@ -104,7 +128,8 @@ void add_nbv_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "nbv",
       "One map update and next best view for real scans: preprocess each scan, place it by its "
-      "pose (or register it to the first by ICP when no --pose is given), build the semioctree "
+      "pose (--pose, or the pose its file carries: a PTX header, a PCD/PLY viewpoint), or else "
+      "register it to the first by ICP, build the semioctree "
       "(occupancy, doors and windows, occlusion), score the candidate positions and report the "
       "next best view and the stop percentage. Returns outside the scanner's limits (--min-range, "
       "--elevation-min: on a robot, the lowest elevation that clears its body) are dropped: they "
@@ -115,7 +140,8 @@ void add_nbv_command(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--pose", o->poses,
                   "scanner pose X,Y,Z[,YAW_DEG] of each --cloud in the survey frame (default: "
-                  "the first at the origin, the others registered by ICP; PTX files carry theirs)");
+                  "the pose the file carries (PTX header, PCD/PLY viewpoint); without one, the "
+                  "first scan at the origin and the others registered by ICP)");
   cmd->add_option("--out", o->out, "output directory")->required();
   add_planning_options(*cmd, o->plan);
   cmd->add_option("--robot-radius", o->robot_radius, "safety cylinder radius, m")

@@ -1,6 +1,8 @@
 // `semioctree scan`: one synthetic 360° scan of a scene, written as PCD or PLY.
+#include <cctype>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -9,6 +11,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "progress_line.h"
 #include "semioctree/sim/geometry.h"
 #include "semioctree/sim/point_io.h"
 #include "semioctree/sim/raycaster.h"
@@ -55,6 +58,12 @@ sim::Pose2 parse_at(const std::string& text) {
   return {values[0], values[1], values.size() == 3 ? values[2] : 0.0};
 }
 
+bool is_ply(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".ply";
+}
+
 void run_scan(const ScanArgs& a) {
   const sim::Pose2 pose = parse_at(a.at);
   std::string ext = a.out.size() >= 4 ? a.out.substr(a.out.size() - 4) : "";
@@ -88,15 +97,16 @@ void run_scan(const ScanArgs& a) {
   options.threads = a.threads;
   options.with_intensity = !a.no_intensity;
   int last_percent = -1;
+  ProgressLine progress(stderr);
   options.progress = [&](std::uint32_t done, std::uint32_t rows) {
     const int percent = static_cast<int>(100.0 * done / rows);
     if (percent / 10 != last_percent / 10) {
-      std::cerr << "\rscan: " << percent << " %" << std::flush;
+      progress.update("scan: " + std::to_string(percent) + " %");
       last_percent = percent;
     }
   };
   const sim::Scan scan = sim::scan(*caster, scene.scanner, pose, options);
-  std::cerr << "\n";
+  progress.finish();
   sim::write_scan(a.out, scan);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -104,6 +114,12 @@ void run_scan(const ScanArgs& a) {
             << " rays (scanner frame; pose x=" << pose.x << " y=" << pose.y
             << " z=" << scan.sensor_height << " yaw_deg=" << pose.yaw_deg
             << " in the file's viewpoint), " << seconds << " s\n";
+  // PCL before 1.14 drops a PLY file's viewpoint on reading (PCL issue #5761).
+  if (is_ply(a.out))
+    std::cout << "note: PCL 1.13 (Debian 12) does not read a PLY viewpoint back; give this "
+                 "scan's pose to classify/nbv with --pose "
+              << pose.x << "," << pose.y << "," << scan.sensor_height << "," << pose.yaw_deg
+              << ", or write .pcd\n";
 }
 
 }  // namespace

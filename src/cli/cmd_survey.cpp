@@ -35,7 +35,7 @@ struct SurveyOptions {
   std::string policy = "nbv";  // or "random": a random feasible candidate (the baseline)
   std::vector<double> start;   // X,Y: replaces the scene's robot start
   std::string cache;
-  bool coverage = true;
+  bool skip_coverage = false;
 };
 
 double since(std::chrono::steady_clock::time_point t0) {
@@ -89,6 +89,9 @@ void run_survey(const SurveyOptions& o) {
   p.map.limits.elevation_max_deg = scene.scanner.elevation_max_deg;
   apply_planning_options(o.plan, p);
   if (o.homogeneous) p.map.grid = {o.plan.leaf, o.plan.leaf, o.plan.coarse};
+  if (o.homogeneous && o.plan.level > 0)
+    throw std::invalid_argument("--level " + std::to_string(o.plan.level) +
+                                ": the homogeneous grid has one level, 0 (the leaf)");
   p.robot.radius = scene.robot.radius;
   p.robot.scanner_height = scene.scanner.height;
   if (o.homogeneous)
@@ -116,7 +119,7 @@ void run_survey(const SurveyOptions& o) {
     const sim::Scan s = sim::scan(*caster, scene.scanner, robot.true_pose(), so);
     const double scan_seconds = since(t0);
     const sim::Pose2 reported = robot.reported_pose();
-    std::printf("scan %d at (%.2f, %.2f) reported (%.2f, %.2f, %.1f°): %zu points [%.2f s]\n", i,
+    std::printf("scan %d at (%.3f, %.3f) reported (%.3f, %.3f, %.2f°): %zu points [%.2f s]\n", i,
                 robot.true_pose().x, robot.true_pose().y, reported.x, reported.y, reported.yaw_deg,
                 s.points.size(), scan_seconds);
     std::fflush(stdout);
@@ -183,7 +186,7 @@ void run_survey(const SurveyOptions& o) {
     if (i > 0) pose_errors.push_back({{"m", err_m}, {"deg", err_deg}});
     if (i > 0)
       std::printf("  pose error after registration: %.1f mm, %.3f°\n", 1000 * err_m, err_deg);
-    if (o.coverage) {
+    if (!o.skip_coverage) {
       const Eigen::Affine3f to_world = (survey_to_world * r.scanner_to_survey).cast<float>();
       for (const Eigen::Vector3f& q : s.points) measured.push_back(to_world * q);
     }
@@ -212,7 +215,7 @@ void run_survey(const SurveyOptions& o) {
     }
     const Eigen::Vector3d target = survey_to_world * Eigen::Vector3d(next.x, next.y, 0.0);
     robot.move_to({target.x(), target.y(), robot.true_pose().yaw_deg});
-    std::printf("move to the %s (%.2f, %.2f): %.2f m driven so far\n",
+    std::printf("move to the %s (%.3f, %.3f): %.2f m driven so far\n",
                 o.policy == "random" ? "random candidate" : "NBV", target.x(), target.y(),
                 robot.distance_driven());
     std::fflush(stdout);
@@ -224,7 +227,7 @@ void run_survey(const SurveyOptions& o) {
   extra["homogeneous"] = o.homogeneous;
   extra["policy"] = o.policy;
   extra["distance_driven_m"] = robot.distance_driven();
-  if (o.coverage) {
+  if (!o.skip_coverage) {
     const auto t0 = std::chrono::steady_clock::now();
     const std::string cache = o.cache.empty() ? sim::default_cache_dir() : o.cache;
     const sim::CoverageReference ref = sim::load_or_compute_coverage_reference(truth, cache);
@@ -279,7 +282,7 @@ void add_survey_command(CLI::App& app) {
   cmd->add_option("--cache", o->cache,
                   "directory of cached coverage references (default: $XDG_CACHE_HOME/semioctree "
                   "or ~/.cache/semioctree)");
-  cmd->add_flag("!--no-coverage", o->coverage,
+  cmd->add_flag("--no-coverage", o->skip_coverage,
                 "skip the coverage of the scene's surfaces in survey.json");
   cmd->callback([o] { run_survey(*o); });
 }

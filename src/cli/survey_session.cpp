@@ -72,7 +72,14 @@ void add_planning_options(CLI::App& cmd, PlanningOptions& o) {
 
 void apply_planning_options(const PlanningOptions& o, SessionParams& p) {
   if (!(o.stop >= 0)) throw std::invalid_argument("--stop must be a percentage ≥ 0");
-  SemiOcTree::coarse_level_for(o.leaf, o.coarse);  // L = r·2^k, or a clear error
+  const unsigned k = SemiOcTree::coarse_level_for(o.leaf, o.coarse);  // L = r·2^k, or a clear error
+  if (o.level > int(k))
+    throw std::invalid_argument("--level " + std::to_string(o.level) +
+                                " is finer than the leaf: --leaf and --coarse give levels 0 "
+                                "(coarse voxels) to " +
+                                std::to_string(k) + " (leaf)");
+  if (o.level >= 0 && o.method != 2)
+    throw std::invalid_argument("--level applies to --method 2 only");
   p.map.grid = {o.leaf, o.coarse, 0.0};
   p.map.threads = o.threads;
   p.preprocess.target_points = o.target_points;
@@ -192,7 +199,7 @@ ScanOutcome SurveySession::add_scan(const IncomingScan& in,
   out.stop_percent = nbv.stop_percent;
   if (nbv.best)
     std::printf(
-        "  nbv: %zu feasible candidates, %zu occluded targets; best (%.2f, %.2f) score "
+        "  nbv: %zu feasible candidates, %zu occluded targets; best (%.3f, %.3f) score "
         "%.1f, stop %.3f %% [%.2f s]\n",
         nbv.candidate_report.feasible, nbv.scoring.targets, nbv.best->position.x,
         nbv.best->position.y, nbv.best->score, nbv.stop_percent, seconds["nbv"].get<double>());
@@ -230,7 +237,8 @@ ScanOutcome SurveySession::add_scan(const IncomingScan& in,
   json volume;
   r["octants"] = map_json(map_.tree(), volume);
   r["volume_percent"] = volume;
-  r["stop_percent"] = nbv.stop_percent;
+  // Eq 5 is measured from the NBV: without one there is nothing to report.
+  r["stop_percent"] = nbv.best ? json(nbv.stop_percent) : json(nullptr);
   r["nbv"] = nbv.best ? json{{"x", nbv.best->position.x},
                              {"y", nbv.best->position.y},
                              {"z", nbv.best->position.z},
@@ -262,6 +270,9 @@ void SurveySession::write_survey_json(const std::string& stopped_because, const 
             {"stop_threshold_percent", params_.stop_percent},
             {"method", params_.nbv.method},
             {"stopped_because", stopped_because},
+            // Only the stop percentage says the room is done; the other reasons leave
+            // occluded space that the NBV (if any) would still reveal.
+            {"complete", stopped_because == "stop_percentage"},
             {"scans", records_},
             {"openings", openings}};
   for (const auto& [k, v] : extra.items()) j[k] = v;
