@@ -417,8 +417,8 @@ TEST(ScanCommand, BadArgumentsAreClearErrors) {
   CliRun r = run_cli("scan --scene " + scene + " --at 1,x --out /tmp/x.pcd");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_EQ(r.err,
-            "semioctree: error: --at: expected X,Y or X,Y,YAW_DEG (numbers, metres and degrees), "
-            "got \"1,x\"\n");
+            "semioctree: error: --at: expected X,Y or X,Y,YAW_DEG (numbers within ±100000, "
+            "metres and degrees), got \"1,x\"\n");
   r = run_cli("scan --scene " + scene + " --at 1,2,3,4 --out /tmp/x.pcd");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--at: expected X,Y or X,Y,YAW_DEG (2 or 3 numbers)"), std::string::npos)

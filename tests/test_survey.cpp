@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <numeric>
 
@@ -90,6 +91,83 @@ TEST(Survey, BadInputIsAClearErrorAndANonZeroExit) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find(junk.string()), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(scratch() / "bad_nbv" / "survey.json"));
+}
+
+// Values a typo produces (nan, a sign, a few orders of magnitude) are refused
+// before any work, naming the option or scene key; before, some ran for
+// minutes, exhausted memory or aborted inside Embree.
+TEST(Cli, NonsenseValuesAreRefusedUpFrontWithTheirName) {
+  const std::string box = kScenes + "box-room.scene.json", out = (scratch() / "nonsense").string();
+  const struct {
+    std::string args, expect;
+  } cases[] = {
+      {"survey --scene " + box + " --out " + out + " --threads 100000", "--threads"},
+      {"survey --scene " + box + " --out " + out + " --candidate-spacing nan",
+       "--candidate-spacing"},
+      {"survey --scene " + box + " --out " + out + " --target-points 1", "--target-points"},
+      {"survey --scene " + box + " --out " + out + " --seed -1", "--seed"},
+      {"survey --scene " + box + " --out " + out + " --stop 1e9", "--stop"},
+      {"survey --scene " + box + " --out " + out + " --start inf,3", "--start"},
+      {"survey --scene " + box + " --out " + out + " --method 2 --level 9", "--level"},
+      {"survey --scene " + box + " --out " + out + " --level 2", "--level"},
+      {"classify --scene " + box + " --out " + out + " --max-range nan", "--max-range"},
+      {"classify --scene " + box + " --out " + out + " --min-range 5 --max-range 2", "--min-range"},
+      {"scan --scene " + box + " --at 1e20,2 --out " + out + ".pcd", "--at"},
+      {"scan --scene " + box + " --at 1,2 --azimuth-step 1e-5 --out " + out + ".pcd",
+       "--azimuth-step"},
+      {"scene-info " + box + " --cell nan", "--cell"},
+      {"info " + scratch().string(), "is a directory"},
+  };
+  for (const auto& c : cases) {
+    const auto r = run_cli(c.args);
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.args << "\n" << r.err;
+    EXPECT_EQ(r.err.find("bad_alloc"), std::string::npos) << c.args;
+  }
+  EXPECT_FALSE(fs::exists(out));
+
+  // Scene files: a number far out of range, steps that ask for 1e13 rays, and
+  // an object kilometres away (the floor plan would have 3.6e9 cells).
+  auto variant = [&](const std::string& name, const std::function<void(json&)>& edit) {
+    json j = read_json(box);
+    edit(j);
+    const fs::path f = scratch() / (name + ".scene.json");
+    std::ofstream(f) << j.dump();
+    return f.string();
+  };
+  const std::string high = variant("high", [](json& j) { j["scanner"]["height"] = 1e20; });
+  auto r = run_cli("scene-info " + high);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("scanner.height"), std::string::npos) << r.err;
+  const std::string fine =
+      variant("fine", [](json& j) { j["scanner"]["azimuth_step_deg"] = 1e-5; });
+  r = run_cli("scan --scene " + fine + " --at 1,2 --out " + out + ".pcd");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("rays per scan"), std::string::npos) << r.err;
+  const std::string far = variant("far", [](json& j) {
+    j["boxes"] = json::array({{{"center", {3000, 3000, 0.5}}, {"size", {1, 1, 1}}}});
+  });
+  r = run_cli("scene-info " + far);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("far away"), std::string::npos) << r.err;
+  // A start the survey would refuse is not a valid scene either.
+  const std::string blocked = variant("blocked", [](json& j) {
+    j["robot"]["start"] = {0.2, 1.5};
+  });  // 0.2 m from a wall
+  r = run_cli("scene-info " + blocked);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("the robot's start (0.20, 1.50)"), std::string::npos) << r.err;
+}
+
+TEST(Survey, ASecondRunReplacesTheFirstRunsScanFolders) {
+  const std::string args = "--scene " + kScenes + "box-room.scene.json --stop 0 --no-coverage";
+  ASSERT_FALSE(survey("rerun", args + " --max-scans 2").is_null());
+  ASSERT_TRUE(fs::exists(scratch() / "rerun" / "scan_01"));
+  const json j = survey("rerun", args + " --max-scans 1");
+  ASSERT_FALSE(j.is_null());
+  EXPECT_EQ(j["scans"].size(), 1u);
+  EXPECT_TRUE(fs::exists(scratch() / "rerun" / "scan_00"));
+  EXPECT_FALSE(fs::exists(scratch() / "rerun" / "scan_01"));
 }
 
 TEST(Survey, WritesEveryOutputWithTheDocumentedSchema) {

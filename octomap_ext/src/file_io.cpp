@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -144,6 +145,9 @@ TreeFile read_bt(std::istream& s, const Header& h) {
 }  // namespace
 
 TreeFile read_tree_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))  // an ifstream opens a directory on Linux
+    throw FileError(path + ": is a directory, not an OctoMap file");
   std::ifstream f(path, std::ios::binary);
   if (!f) throw FileError(path + ": cannot open: " + std::strerror(errno));
   try {

@@ -4,8 +4,10 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <queue>
 #include <random>
+#include <stdexcept>
 
 namespace semioctree::sim {
 
@@ -270,8 +272,20 @@ FloorPlan GroundTruth::floor_plan(double cell) const {
   lo = lo.cwiseMin(scene_.robot.start);
   hi = hi.cwiseMax(scene_.robot.start);
   plan.origin = lo - Eigen::Vector2d::Constant(2 * cell);  // a free margin all round
-  plan.nx = static_cast<int>(std::ceil((hi.x() - plan.origin.x()) / cell)) + 2;
-  plan.ny = static_cast<int>(std::ceil((hi.y() - plan.origin.y()) / cell)) + 2;
+  // Each wall visits every cell: a scene spread over kilometres (a stray object
+  // far away) would take minutes and gigabytes before failing.
+  const double cells_x = std::ceil((hi.x() - plan.origin.x()) / cell) + 2,
+               cells_y = std::ceil((hi.y() - plan.origin.y()) / cell) + 2;
+  if (!(cells_x * cells_y <= kMaxFloorPlanCells)) {
+    char msg[300];
+    std::snprintf(msg, sizeof msg,
+                  "the scene spans %.1f x %.1f m: its floor plan at %g m cells would have %.3g "
+                  "cells (at most %.3g); is an object placed far away by mistake?",
+                  hi.x() - lo.x(), hi.y() - lo.y(), cell, cells_x * cells_y, kMaxFloorPlanCells);
+    throw std::invalid_argument(msg);
+  }
+  plan.nx = static_cast<int>(cells_x);
+  plan.ny = static_cast<int>(cells_y);
   const std::size_t n = static_cast<std::size_t>(plan.nx) * static_cast<std::size_t>(plan.ny);
   auto centre = [&](int ix, int iy) -> Eigen::Vector2d {
     return plan.origin + cell * Eigen::Vector2d(ix + 0.5, iy + 0.5);

@@ -4,21 +4,36 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <thread>
 
 namespace semioctree::sim {
 
 ScanGrid scan_grid(const ScannerConfig& c) {
+  // The small slack keeps e.g. (90 − (−60)) / 0.1 = 1500 from rounding down to 1499.
+  const double rows =
+      std::floor((c.elevation_max_deg - c.elevation_min_deg) / c.elevation_step_deg + 1e-6) + 1;
+  const double cols = std::ceil(360.0 / c.azimuth_step_deg - 1e-6);
+  // Each ray keeps up to ~30 bytes of output. 0.02° steps, finer than most
+  // surveys use, give 1.35e8 rays; a step typed a few orders too small would
+  // ask for terabytes.
+  if (!(rows * cols <= double(kMaxRaysPerScan))) {
+    char msg[300];
+    std::snprintf(msg, sizeof msg,
+                  "scanner steps of %g° (azimuth) and %g° (elevation) make %.3g rays per scan "
+                  "(at most %.3g)",
+                  c.azimuth_step_deg, c.elevation_step_deg, rows * cols, double(kMaxRaysPerScan));
+    throw std::invalid_argument(msg);
+  }
   ScanGrid g;
   g.elevation_min_deg = c.elevation_min_deg;
   g.elevation_step_deg = c.elevation_step_deg;
   g.azimuth_step_deg = c.azimuth_step_deg;
-  // The small slack keeps e.g. (90 − (−60)) / 0.1 = 1500 from rounding down to 1499.
-  g.rows = static_cast<std::uint32_t>(std::floor(
-               (c.elevation_max_deg - c.elevation_min_deg) / c.elevation_step_deg + 1e-6)) +
-           1;
-  g.cols = static_cast<std::uint32_t>(std::ceil(360.0 / c.azimuth_step_deg - 1e-6));
+  g.rows = static_cast<std::uint32_t>(rows);
+  g.cols = static_cast<std::uint32_t>(cols);
   return g;
 }
 

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "option_checks.h"
 #include "semioctree/scan_io.h"
 #include "semioctree/update.h"
 #ifdef SEMIOCTREE_HAVE_SIM
@@ -84,26 +85,44 @@ void add_scan_source_options(CLI::App& cmd, ScanSource& src, const std::string& 
                  "scene file: scan it from the robot's start with the synthetic scanner")
       ->check(CLI::ExistingFile)
       ->excludes(cloud_opt);
-  cmd.add_option("--seed", src.seed, "scanner noise seed (with --scene)")->capture_default_str();
+  cmd.add_option("--seed", src.seed, "scanner noise seed (with --scene)")
+      ->check(whole_in(0, 9223372036854775807))
+      ->capture_default_str();
 #else
   (void)cloud_opt;
 #endif
   auto& p = src.pre;
   cmd.add_option(
          "--target-points", p.target_points,
-         "decimate to about this many points (distance filter; the paper keeps ~400000; 0: off)")
+         "decimate to about this many points (distance filter; the paper keeps ~400000; 0: off; "
+         "else at least 1000)")
+      ->check(zero_or_whole_in(1000, 1000000000))
       ->capture_default_str();
   cmd.add_option("--min-spacing", p.min_spacing,
                  "decimate to this minimum point spacing in metres (0: off)")
+      ->check(finite_in(0, 10))
       ->capture_default_str();
   cmd.add_option(
          "--sigma-factor", p.sigma_factor,
          "remove points within this many standard deviations of the floor and ceiling peaks")
+      ->check(finite_in(0, 100))
       ->capture_default_str();
+}
+
+void check_scanner_limits(const ScannerView& v) {
+  if (!(v.min_range < v.max_range))
+    throw std::invalid_argument("--min-range (" + std::to_string(v.min_range) +
+                                ") must be below --max-range (" + std::to_string(v.max_range) +
+                                ")");
+  if (!(v.elevation_min_deg < v.elevation_max_deg))
+    throw std::invalid_argument("--elevation-min (" + std::to_string(v.elevation_min_deg) +
+                                ") must be below --elevation-max (" +
+                                std::to_string(v.elevation_max_deg) + ")");
 }
 
 PreparedCloud prepare(const ScanSource& src, const std::string& command,
                       const ScannerView* limits) {
+  if (limits) check_scanner_limits(*limits);
   if (src.input.files.empty() && src.scene.empty())
     throw std::invalid_argument(command + ": give --cloud FILE or --scene FILE");
 #ifdef SEMIOCTREE_HAVE_SIM
@@ -114,20 +133,27 @@ PreparedCloud prepare(const ScanSource& src, const std::string& command,
 
 void add_scanner_limit_options(CLI::App& cmd, ScannerView& limits) {
   cmd.add_option("--max-range", limits.max_range, "scanner maximum range, m")
+      ->check(finite_positive(100000))
       ->capture_default_str();
-  cmd.add_option("--min-range", limits.min_range, "scanner minimum range, m")
+  cmd.add_option("--min-range", limits.min_range, "scanner minimum range, m (below --max-range)")
+      ->check(finite_in(0, 100000))
       ->capture_default_str();
-  cmd.add_option("--elevation-min", limits.elevation_min_deg, "scanner lowest elevation, degrees")
+  cmd.add_option("--elevation-min", limits.elevation_min_deg,
+                 "scanner lowest elevation, degrees (-90 to 90, below --elevation-max)")
+      ->check(finite_in(-90, 90))
       ->capture_default_str();
   cmd.add_option("--elevation-max", limits.elevation_max_deg, "scanner highest elevation, degrees")
+      ->check(finite_in(-90, 90))
       ->capture_default_str();
 }
 
 void add_grid_options(CLI::App& cmd, DiscretizeParams& grid) {
   cmd.add_option("--leaf", grid.leaf, "leaf (finest octant) size r in metres")
+      ->check(finite_positive())
       ->capture_default_str();
   cmd.add_option("--coarse", grid.coarse,
                  "coarse voxel size L in metres; must be r*2^k (L = r gives the homogeneous grid)")
+      ->check(finite_positive())
       ->capture_default_str();
 }
 

@@ -51,6 +51,8 @@ PreparedCloud prepare(const ScanSource& src, const std::string& command,
                       const ScannerView* limits = nullptr);
 // --max-range, --min-range, --elevation-min, --elevation-max.
 void add_scanner_limit_options(CLI::App& cmd, ScannerView& limits);
+// min < max for range and elevation; throws std::invalid_argument naming the options.
+void check_scanner_limits(const ScannerView& limits);
 // --leaf, --coarse: the semioctree's grid.
 void add_grid_options(CLI::App& cmd, DiscretizeParams& grid);
 // The title of a slice image: the input file's name.

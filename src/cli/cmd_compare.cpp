@@ -8,6 +8,7 @@
 
 #include "cloud_input.h"
 #include "commands.h"
+#include "option_checks.h"
 #include "semioctree/discretize.h"
 #include "semioctree/figures.h"
 #include "semioctree/occlusion.h"
@@ -33,8 +34,10 @@ void add_compare_command(CLI::App& app) {
   add_scan_source_options(*cmd, o->source, "scanner pose X,Y,Z[,YAW_DEG] of the cloud");
   cmd->add_option("--leaves", o->leaves, "leaf sizes to compare, metres")
       ->capture_default_str()
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(finite_positive());
   cmd->add_option("--coarse", o->coarse, "coarse voxel size of the semioctree, metres")
+      ->check(finite_positive())
       ->capture_default_str();
   cmd->add_option("--out", o->out, "output directory")->required();
   cmd->callback([o] {

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "option_checks.h"
 #include "progress_line.h"
 #include "semioctree/sim/coverage.h"
 #include "semioctree/sim/ground_truth.h"
@@ -27,7 +28,7 @@ namespace {
 struct CoverageBoundArgs {
   std::string scene;
   double spacing = 0.25;
-  std::size_t max_scans = 6;
+  int max_scans = 6;
   std::string out;
   std::string cache;
   unsigned threads = 0;
@@ -88,7 +89,13 @@ void run_coverage_bound(const CoverageBoundArgs& a) {
 
   nlohmann::json plans = nlohmann::json::array();
   std::printf("%6s  %14s  %14s\n", "scans", "greedy %", "local search %");
-  for (std::size_t k = 1; k <= a.max_scans; ++k) {
+  std::size_t max_scans = std::size_t(a.max_scans);
+  if (max_scans > positions.size()) {
+    std::printf("plans of at most %zu scans: the grid has %zu positions\n", positions.size(),
+                positions.size());
+    max_scans = positions.size();
+  }
+  for (std::size_t k = 1; k <= max_scans; ++k) {
     const sim::CoveragePlan greedy = sim::greedy_coverage_plan(covered, first, k);
     const sim::CoveragePlan best = sim::improve_coverage_plan(covered, greedy);
     std::printf("%6zu  %14.2f  %14.2f\n", k, greedy.percent, best.percent);
@@ -128,17 +135,20 @@ void add_coverage_bound_command(CLI::App& app) {
       "at 0.25 m (645 positions) takes about 9 minutes on 2 cores.");
   cmd->add_option("--scene", a->scene, "scene file (.scene.json)")->required();
   cmd->add_option("--spacing", a->spacing, "spacing of the grid of scan positions, m")
-      ->check(CLI::PositiveNumber)
+      ->check(finite_in(0.05, 10))
       ->capture_default_str();
-  cmd->add_option("--max-scans", a->max_scans, "plans of 1 to this many scans")
+  cmd->add_option("--max-scans", a->max_scans,
+                  "plans of 1 to this many scans (at most the grid's position count)")
       ->capture_default_str();
   cmd->add_option("--out", a->out, "also write the plans to this JSON file");
   cmd->add_option("--cache", a->cache,
                   "directory of cached coverage references (default: $XDG_CACHE_HOME/semioctree "
                   "or ~/.cache/semioctree)");
   cmd->add_option("--seed", a->seed, "range noise seed of the simulated scans")
+      ->check(whole_in(0, 9223372036854775807))
       ->capture_default_str();
-  cmd->add_option("--threads", a->threads, "worker threads (0: one per core)")
+  cmd->add_option("--threads", a->threads, "worker threads (0: one per core; at most 256)")
+      ->check(thread_count())
       ->capture_default_str();
   cmd->callback([a] { run_coverage_bound(*a); });
 }

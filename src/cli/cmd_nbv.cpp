@@ -12,6 +12,7 @@
 
 #include "cloud_input.h"
 #include "commands.h"
+#include "option_checks.h"
 #include "semioctree/scan_io.h"
 #include "survey_session.h"
 
@@ -47,6 +48,7 @@ void run_nbv(const NbvOptions& o) {
     throw std::invalid_argument("give one --pose per --cloud file (" +
                                 std::to_string(o.clouds.size()) + " files, " +
                                 std::to_string(o.poses.size()) + " poses)");
+  check_scanner_limits(o.limits);
   SessionParams p;
   p.out = o.out;
   p.map.limits = o.limits;
@@ -142,12 +144,17 @@ void add_nbv_command(CLI::App& app) {
                   "scanner pose X,Y,Z[,YAW_DEG] of each --cloud in the survey frame (default: "
                   "the pose the file carries (PTX header, PCD/PLY viewpoint); without one, the "
                   "first scan at the origin and the others registered by ICP)");
-  cmd->add_option("--out", o->out, "output directory")->required();
+  cmd->add_option("--out", o->out,
+                  "output directory (a survey.json and scan_NN/ folders of an earlier run "
+                  "there are replaced)")
+      ->required();
   add_planning_options(*cmd, o->plan);
-  cmd->add_option("--robot-radius", o->robot_radius, "safety cylinder radius, m")
+  cmd->add_option("--robot-radius", o->robot_radius, "safety cylinder radius, m (0.05 to 5)")
+      ->check(finite_in(0.05, 5))
       ->capture_default_str();
   cmd->add_option("--scanner-height", o->scanner_height,
-                  "scanner optical centre above the floor, m (default: from the first scan)");
+                  "scanner optical centre above the floor, m (default: from the first scan)")
+      ->check(finite_positive(100));
   add_scanner_limit_options(*cmd, o->limits);
   cmd->callback([o] { run_nbv(*o); });
 }

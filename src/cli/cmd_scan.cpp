@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "option_checks.h"
 #include "progress_line.h"
 #include "semioctree/sim/geometry.h"
 #include "semioctree/sim/point_io.h"
@@ -47,9 +48,12 @@ sim::Pose2 parse_at(const std::string& text) {
     } catch (const std::exception&) {
       used = 0;
     }
-    if (used == 0 || used != item.size() || !std::isfinite(v))
+    // Beyond ±100 km a position is a typo (and Embree rejects rays from ~1e18 m).
+    if (used == 0 || used != item.size() || !std::isfinite(v) || std::abs(v) > 1e5)
       throw std::runtime_error(
-          "--at: expected X,Y or X,Y,YAW_DEG (numbers, metres and degrees), got \"" + text + "\"");
+          "--at: expected X,Y or X,Y,YAW_DEG (numbers within ±100000, metres and degrees), got "
+          "\"" +
+          text + "\"");
     values.push_back(v);
   }
   if (values.size() != 2 && values.size() != 3)
@@ -142,16 +146,19 @@ void add_scan_command(CLI::App& app) {
       ->required();
   cmd->add_option("--out", args->out, "output file, FILE.pcd or FILE.ply (binary)")->required();
   cmd->add_option("--seed", args->seed,
-                  "seed of the range noise; the same seed gives the same file (default 1)");
+                  "seed of the range noise; the same seed gives the same file (default 1)")
+      ->check(whole_in(0, 9223372036854775807));
   cmd->add_option("--azimuth-step", args->azimuth_step,
                   "azimuth step in degrees (default: the scene's scanner.azimuth_step_deg, 0.2)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_in(0.001, 90));
   cmd->add_option(
          "--elevation-step", args->elevation_step,
          "elevation step in degrees (default: the scene's scanner.elevation_step_deg, 0.2)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_in(0.001, 90));
   cmd->add_option("--threads", args->threads,
-                  "worker threads (default 0: one per core); the output does not depend on it");
+                  "worker threads (default 0: one per core; at most 256); the output does not "
+                  "depend on it")
+      ->check(thread_count());
   cmd->add_flag("--no-intensity", args->no_intensity, "leave the intensity field out");
   cmd->callback([args] { run_scan(*args); });
 }

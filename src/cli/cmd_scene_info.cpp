@@ -1,5 +1,7 @@
 // `semioctree scene-info FILE`: validate a scene and summarise it.
+#include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -9,8 +11,10 @@
 #include <string>
 
 #include "commands.h"
+#include "option_checks.h"
 #include "semioctree/sim/ground_truth.h"
 #include "semioctree/sim/scene.h"
+#include "sim_input.h"
 
 namespace semioctree::cli {
 
@@ -26,6 +30,12 @@ std::string xyz(const Eigen::Vector3d& p) {
   std::ostringstream os;
   os << std::fixed << std::setprecision(2) << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
   return os.str();
+}
+
+bool is_scene_json(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".json";
 }
 
 void run_scene_info(const SceneInfoArgs& a) {
@@ -45,9 +55,12 @@ void run_scene_info(const SceneInfoArgs& a) {
   }
   std::cout << "scene:       " << scene.name << "  (" << a.file << ": valid)\n";
   if (!scene.description.empty()) std::cout << "description: " << scene.description << "\n";
-  std::cout << "extent:      " << xyz(lo) << " to " << xyz(hi) << "  = " << std::fixed
-            << std::setprecision(2) << hi.x() - lo.x() << " x " << hi.y() - lo.y() << " x "
-            << hi.z() - lo.z() << " m\n";
+  if (tri.vertices.empty())
+    std::cout << "extent:      none (the scene has no geometry)\n";
+  else
+    std::cout << "extent:      " << xyz(lo) << " to " << xyz(hi) << "  = " << std::fixed
+              << std::setprecision(2) << hi.x() - lo.x() << " x " << hi.y() - lo.y() << " x "
+              << hi.z() - lo.z() << " m\n";
   std::cout << "elements:    " << scene.walls.size() << " walls, " << scene.slabs.size()
             << " slabs, " << scene.boxes.size() << " boxes, " << scene.cylinders.size()
             << " cylinders, " << scene.meshes.size() << " meshes\n";
@@ -89,6 +102,17 @@ void run_scene_info(const SceneInfoArgs& a) {
             << s.elevation_min_deg << "° to " << s.elevation_max_deg << "°, range " << s.min_range
             << " to " << s.max_range << " m, noise σ " << std::setprecision(4)
             << s.range_noise_sigma << " m\n";
+  // The scene format requires the start on free floor; `survey` checks the same.
+  std::cout << std::flush;
+  try {
+    check_robot_start(scene, truth, plan, a.file);
+    std::cout << "start:       on free floor, clear of obstacles by the robot's radius\n";
+  } catch (const std::invalid_argument& e) {
+    if (is_scene_json(a.file)) throw;
+    // A mesh or .bt (an object, a map) has no start of its own: inspecting it
+    // is fine; say what a survey of it would need.
+    std::cout << "start:       not usable for a survey: " << e.what() << "\n";
+  }
 }
 
 }  // namespace
@@ -107,9 +131,10 @@ void add_scene_info_command(CLI::App& app) {
   cmd->add_option("--at", args->at,
                   "robot start X,Y for a mesh or .bt scene (default 0,0); replaces robot.start")
       ->delimiter(',')
-      ->expected(2);
+      ->expected(2)
+      ->check(finite_in(-100000, 100000));
   cmd->add_option("--cell", args->cell, "cell size of the floor plan in metres (default 0.05)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_in(0.005, 10));
   cmd->callback([args] { run_scene_info(*args); });
 }
 

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "commands.h"
+#include "option_checks.h"
 #include "semioctree/sim/coverage.h"
 #include "semioctree/sim/geometry.h"
 #include "semioctree/sim/ground_truth.h"
@@ -19,6 +20,7 @@
 #include "semioctree/sim/robot.h"
 #include "semioctree/sim/scanner.h"
 #include "semioctree/sim/scene.h"
+#include "sim_input.h"
 #include "survey_session.h"
 
 namespace semioctree::cli {
@@ -61,20 +63,7 @@ void run_survey(const SurveyOptions& o) {
   const sim::GroundTruth truth(scene);
   const Eigen::Vector2d start = scene.robot.start;
   const sim::FloorPlan plan = truth.floor_plan(0.05);
-  char where[96];
-  std::snprintf(where, sizeof where, "the robot's start (%.2f, %.2f)", start.x(), start.y());
-  if (!plan.in_survey_area(start))
-    throw std::invalid_argument(std::string(where) + " in " + o.scene +
-                                " is outside the floor the robot can reach (the survey area, " +
-                                std::to_string(int(std::round(plan.survey_area_m2))) +
-                                " m²): no reachable start");
-  if (!truth.standing_free(start)) {
-    char radius[32];
-    std::snprintf(radius, sizeof radius, "%.2f m", scene.robot.radius);
-    throw std::invalid_argument(std::string(where) + " in " + o.scene +
-                                " is inside an obstacle or closer than the robot's radius (" +
-                                radius + ") to one");
-  }
+  check_robot_start(scene, truth, plan, o.scene);
   std::printf(
       "survey of %s: start (%.2f, %.2f), survey area %.1f m², robot radius %.2f m, "
       "scanner at %.2f m\n",
@@ -263,13 +252,17 @@ void add_survey_command(CLI::App& app) {
   cmd->add_option("--scene", o->scene, "scene file (.scene.json, mesh or .bt)")
       ->required()
       ->check(CLI::ExistingFile);
-  cmd->add_option("--out", o->out, "output directory")->required();
+  cmd->add_option("--out", o->out,
+                  "output directory (a survey.json and scan_NN/ folders of an earlier run "
+                  "there are replaced)")
+      ->required();
   add_planning_options(*cmd, o->plan);
   cmd->add_option("--max-scans", o->max_scans, "scan budget")->capture_default_str();
   cmd->add_flag("--homogeneous", o->homogeneous,
                 "use the homogeneous grid of leaf-size voxels (the paper's baseline) instead of "
                 "the semioctree");
   cmd->add_option("--seed", o->seed, "seed of the scanner noise and the odometry drift")
+      ->check(whole_in(0, 9223372036854775807))
       ->capture_default_str();
   cmd->add_option("--policy", o->policy,
                   "where to scan next: nbv (the best candidate) or random (a random feasible "
@@ -278,7 +271,8 @@ void add_survey_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--start", o->start, "robot start X,Y in the scene (default: the scene's)")
       ->delimiter(',')
-      ->expected(2);
+      ->expected(2)
+      ->check(finite_in(-100000, 100000));
   cmd->add_option("--cache", o->cache,
                   "directory of cached coverage references (default: $XDG_CACHE_HOME/semioctree "
                   "or ~/.cache/semioctree)");

@@ -1,6 +1,7 @@
 // `semioctree`: the command-line tool (git-style subcommands).
 #include <exception>
 #include <iostream>
+#include <new>
 
 #include "commands.h"
 
@@ -27,6 +28,13 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const std::bad_alloc&) {
+    // Allocation sizes follow the inputs: a leaf far finer than intended, or a
+    // scene or option value far larger (a typo of a few orders of magnitude).
+    std::cerr << "semioctree: error: out of memory: the map or scan asked for is larger than "
+                 "this machine can hold; check the resolution (--leaf, --coarse, --leaves, "
+                 "--cell, scan steps) and the extent of the input\n";
+    return 1;
   } catch (const std::exception& e) {
     std::cerr << "semioctree: error: " << e.what() << "\n";
     return 1;

@@ -1,7 +1,10 @@
 #include "sim_input.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <stdexcept>
+#include <string>
 
 #include "semioctree/sim/geometry.h"
 #include "semioctree/sim/raycaster.h"
@@ -42,6 +45,25 @@ PreparedCloud scan_scene_at_start(const std::string& scene_path, std::uint64_t s
               out.pre.output_points,
               std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count());
   return out;
+}
+
+void check_robot_start(const sim::Scene& scene, const sim::GroundTruth& truth,
+                       const sim::FloorPlan& plan, const std::string& scene_path) {
+  const Eigen::Vector2d start = scene.robot.start;
+  char where[96];
+  std::snprintf(where, sizeof where, "the robot's start (%.2f, %.2f)", start.x(), start.y());
+  if (!plan.in_survey_area(start))
+    throw std::invalid_argument(std::string(where) + " in " + scene_path +
+                                " is outside the floor the robot can reach (the survey area, " +
+                                std::to_string(int(std::round(plan.survey_area_m2))) +
+                                " m²): no reachable start");
+  if (!truth.standing_free(start)) {
+    char radius[32];
+    std::snprintf(radius, sizeof radius, "%.2f m", scene.robot.radius);
+    throw std::invalid_argument(std::string(where) + " in " + scene_path +
+                                " is inside an obstacle or closer than the robot's radius (" +
+                                radius + ") to one");
+  }
 }
 
 }  // namespace semioctree::cli

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "cloud_input.h"
+#include "semioctree/sim/ground_truth.h"
 
 namespace semioctree::cli {
 
@@ -13,5 +14,11 @@ namespace semioctree::cli {
 // (true pose known, so no registration), and preprocesses the cloud.
 PreparedCloud scan_scene_at_start(const std::string& scene_path, std::uint64_t seed,
                                   const PreprocessParams& params);
+
+// Throws std::invalid_argument unless the robot's start is on the floor the
+// robot can reach (the survey area of `plan`) and clear of obstacles by its
+// radius: where `survey` must begin. `scene_path` names the scene in the message.
+void check_robot_start(const sim::Scene& scene, const sim::GroundTruth& truth,
+                       const sim::FloorPlan& plan, const std::string& scene_path);
 
 }  // namespace semioctree::cli

@@ -2,11 +2,13 @@
 
 #include <pcl/common/transforms.h>
 
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 
+#include "option_checks.h"
 #include "semioctree/figures.h"
 #include "semioctree/octomap_ext/file_io.h"
 #include "semioctree/outputs.h"
@@ -48,9 +50,15 @@ json pose_json(const Eigen::Isometry3d& p) {
 }
 
 void add_planning_options(CLI::App& cmd, PlanningOptions& o) {
-  cmd.add_option("--leaf", o.leaf, "leaf (finest octant) size r, m")->capture_default_str();
-  cmd.add_option("--coarse", o.coarse, "coarse voxel size L = r*2^k, m")->capture_default_str();
-  cmd.add_option("--stop", o.stop, "stop percentage threshold (Eq 5), %")->capture_default_str();
+  cmd.add_option("--leaf", o.leaf, "leaf (finest octant) size r, m")
+      ->check(finite_positive())
+      ->capture_default_str();
+  cmd.add_option("--coarse", o.coarse, "coarse voxel size L = r*2^k, m")
+      ->check(finite_positive())
+      ->capture_default_str();
+  cmd.add_option("--stop", o.stop, "stop percentage threshold (Eq 5), %")
+      ->check(finite_in(0, 100))
+      ->capture_default_str();
   cmd.add_option(
          "--method", o.method,
          "NBV scoring: 1 = occluded volume, all levels (paper), 2 = one level (--level), 3 = "
@@ -60,14 +68,19 @@ void add_planning_options(CLI::App& cmd, PlanningOptions& o) {
   cmd.add_option("--level", o.level,
                  "method 2: the octree level scored, 0 = coarse voxels ... k = leaf (default: the "
                  "leaf)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(whole_in(0, 16));
   cmd.add_option("--candidate-spacing", o.candidate_spacing,
                  "spacing of the NBV candidate grid at scanner height, m")
+      ->check(finite_positive(10))
       ->capture_default_str();
   cmd.add_option("--target-points", o.target_points,
-                 "decimate each scan to about this many points (paper: 400 000)")
+                 "decimate each scan to about this many points (paper: 400 000; 0: keep all; "
+                 "else at least 1000)")
+      ->check(zero_or_whole_in(1000, 1000000000))
       ->capture_default_str();
-  cmd.add_option("--threads", o.threads, "worker threads (0: one per core)")->capture_default_str();
+  cmd.add_option("--threads", o.threads, "worker threads (0: one per core; at most 256)")
+      ->check(thread_count())
+      ->capture_default_str();
 }
 
 void apply_planning_options(const PlanningOptions& o, SessionParams& p) {
@@ -91,7 +104,37 @@ void apply_planning_options(const PlanningOptions& o, SessionParams& p) {
   p.stop_percent = o.stop;
 }
 
-SurveySession::SurveySession(const SessionParams& params) : params_(params), map_(params.map) {}
+SurveySession::SurveySession(const SessionParams& params) : params_(params), map_(params.map) {
+  clear_previous_survey(params_.out);
+}
+
+void clear_previous_survey(const std::string& dir) {
+  // A survey.json and scan_NN/ folders left by an earlier run would sit beside
+  // the new ones (a 3-scan run over a 5-scan one keeps scan_03, scan_04) and
+  // read as part of it. Only what a survey writes is removed.
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return;
+  std::size_t removed = 0;
+  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    const bool scan_dir = name.size() == 7 && name.compare(0, 5, "scan_") == 0 &&
+                          std::isdigit(static_cast<unsigned char>(name[5])) &&
+                          std::isdigit(static_cast<unsigned char>(name[6])) && e.is_directory(ec);
+    if (scan_dir || name == "survey.json") {
+      fs::remove_all(e.path(), ec);
+      if (ec)
+        throw std::runtime_error(e.path().string() +
+                                 ": cannot remove the previous run's "
+                                 "output: " +
+                                 ec.message());
+      ++removed;
+    }
+  }
+  if (removed)
+    std::printf("replacing the previous survey in %s (%zu files and scan folders removed)\n",
+                dir.c_str(), removed);
+}
 
 ScanOutcome SurveySession::add_scan(const IncomingScan& in,
                                     const std::optional<Point3>& robot_position) {

@@ -89,4 +89,8 @@ class SurveySession {
 nlohmann::json pose_json(const Eigen::Isometry3d& scanner_to_survey);
 double yaw_deg_of(const Eigen::Isometry3d& pose);
 
+// Removes survey.json and the scan_NN/ folders an earlier run left in `dir`
+// (nothing else); SurveySession does it when it starts.
+void clear_previous_survey(const std::string& dir);
+
 }  // namespace semioctree::cli

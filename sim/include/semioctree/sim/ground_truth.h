@@ -79,7 +79,9 @@ class GroundTruth {
   // just above the floor to the scanner height.
   bool standing_free(const Eigen::Vector2d& p) const;
 
+  // Throws std::invalid_argument beyond kMaxFloorPlanCells cells.
   FloorPlan floor_plan(double cell = 0.05) const;
+  static constexpr double kMaxFloorPlanCells = 4e7;
 
  private:
   Scene scene_;

@@ -41,6 +41,8 @@ struct ScanGrid {
   double elevation_step_deg = 0.0;
   double azimuth_step_deg = 0.0;
 };
+// Most rays one scan may have (scan_grid throws std::invalid_argument beyond).
+constexpr std::uint64_t kMaxRaysPerScan = 200'000'000;
 ScanGrid scan_grid(const ScannerConfig& config);
 // Unit direction of grid cell (row, col) in the scanner frame (x forward, z up).
 Eigen::Vector3d scan_direction(const ScanGrid& grid, std::uint32_t row, std::uint32_t col);
