@@ -691,6 +691,7 @@ std::vector<double> score_targets(const SemiOcTree& tree, const std::vector<Targ
   for (auto& m : memo) m.store(0, std::memory_order_relaxed);
   const unsigned threads = thread_count(params.threads);
   std::vector<BlockerCache> caches(threads, BlockerCache(tree));
+  std::atomic<std::size_t> scored{0};
   const double cpu =
       parallel_for(positions.size(), threads, 1, [&](std::size_t c, unsigned worker) {
         const Point3& a = positions[c];
@@ -723,6 +724,8 @@ std::vector<double> score_targets(const SemiOcTree& tree, const std::vector<Targ
           sum += params.method == 3 ? weight : weight / (1.0 + double(los.n));
         }
         scores[c] = sum;
+        const std::size_t done = scored.fetch_add(1, std::memory_order_relaxed) + 1;
+        if (params.progress) params.progress(done, positions.size());
       });
   if (stats) {
     *stats = ScoringStats{};

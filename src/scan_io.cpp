@@ -2,16 +2,21 @@
 
 #include <pcl/common/transforms.h>
 #include <pcl/console/print.h>
+#include <pcl/conversions.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+
+#include "point_file_checks.h"
 
 namespace semioctree {
 
@@ -45,66 +50,53 @@ void require_file(const std::string& path) {
   if (!std::filesystem::is_regular_file(path, ec)) throw ScanReadError(path + ": no such file");
 }
 
-// PCL's PCD reader trusts its header (a junk or truncated file can crash it):
-// check the header and that the data is all there before PCL reads it.
-void check_pcd(const std::string& path) {
-  pcl::PCDReader reader;
-  pcl::PCLPointCloud2 header;
-  Eigen::Vector4f origin;
-  Eigen::Quaternionf orientation;
-  int version = 0, data_type = 0;
-  unsigned int data_idx = 0;
-  if (reader.readHeader(path, header, origin, orientation, version, data_type, data_idx) < 0)
-    throw ScanReadError(path + ": not a readable PCD file (bad header)");
-  const std::size_t n = std::size_t(header.width) * header.height;
-  if (n == 0) throw ScanReadError(path + ": PCD file holds no points");
-  bool x = false, y = false, z = false;
-  for (const auto& f : header.fields) {
-    x |= f.name == "x";
-    y |= f.name == "y";
-    z |= f.name == "z";
-  }
-  if (!(x && y && z)) throw ScanReadError(path + ": PCD file has no x, y, z fields");
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(path, ec);
-  if (ec || size < data_idx) throw ScanReadError(path + ": PCD file is truncated");
-  const std::uint64_t available = size - data_idx;
-  if (data_type == 1 && available < std::uint64_t(n) * header.point_step)  // binary
-    throw ScanReadError(path + ": PCD file is truncated (" + std::to_string(available) + " of " +
-                        std::to_string(std::uint64_t(n) * header.point_step) + " data bytes)");
-  if (data_type == 2) {  // binary_compressed: two uint32 sizes, then the compressed block
-    std::ifstream f(path, std::ios::binary);
-    f.seekg(std::streamoff(data_idx));
-    std::uint32_t sizes[2] = {0, 0};
-    if (!f.read(reinterpret_cast<char*>(sizes), sizeof(sizes)) ||
-        available < 8 + std::uint64_t(sizes[0]) || sizes[1] != std::uint64_t(n) * header.point_step)
-      throw ScanReadError(path + ": PCD file is truncated or corrupted (compressed block)");
-  }
-}
-
 Scan read_pcl(const std::string& path, bool pcd) {
   require_file(path);
-  if (pcd) check_pcd(path);
+  if (pcd)
+    detail::check_pcd_file(path);
+  else
+    detail::check_ply_file(path);
   Scan scan;
   scan.points.reset(new Cloud);
   scan.source = path;
-  int rc = 0;
+  // What pcl::io::loadPCDFile / loadPLYFile do, with a check between reading
+  // and converting.
+  pcl::PCLPointCloud2 blob;
+  Eigen::Vector4f origin = Eigen::Vector4f::Zero();
+  Eigen::Quaternionf orientation = Eigen::Quaternionf::Identity();
+  int version = 0, rc = 0;
   {
     // PCL warns on stderr about PLY elements it skips (e.g. its own camera
     // element); a failure is reported below through rc.
     const auto saved = pcl::console::getVerbosityLevel();
     pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
-    rc = pcd ? pcl::io::loadPCDFile(path, *scan.points) : pcl::io::loadPLYFile(path, *scan.points);
+    if (pcd)
+      rc = pcl::PCDReader().read(path, blob, origin, orientation, version);
+    else
+      rc = pcl::PLYReader().read(path, blob, origin, orientation, version);
     pcl::console::setVerbosityLevel(saved);
   }
   if (rc < 0)
     throw ScanReadError(path + ": not a readable " + (pcd ? "PCD" : "PLY") + " point cloud");
-  const Eigen::Vector3f origin = scan.points->sensor_origin_.head<3>();
-  const Eigen::Quaternionf q = scan.points->sensor_orientation_;
-  if (!origin.allFinite() || !q.coeffs().allFinite() || q.norm() < 1e-6f)
+  // A PLY camera element sets the cloud's size from its data, after the
+  // header: a size beyond the data read makes PCL's conversion read past it.
+  const std::uint64_t cells = std::uint64_t(blob.width) * blob.height;
+  if (cells == 0 || cells > detail::kMaxFilePoints ||
+      blob.row_step != std::uint64_t(blob.width) * blob.point_step ||
+      std::uint64_t(blob.row_step) * blob.height > blob.data.size())
+    throw ScanReadError(path + ": the file's cloud size, " + std::to_string(blob.width) + " x " +
+                        std::to_string(blob.height) + " points, does not match its data (" +
+                        std::to_string(blob.point_step ? blob.data.size() / blob.point_step : 0) +
+                        " points)");
+  pcl::fromPCLPointCloud2(blob, *scan.points);
+  scan.points->sensor_origin_ = origin;
+  scan.points->sensor_orientation_ = orientation;
+  const Eigen::Vector3f position = origin.head<3>();
+  const Eigen::Quaternionf q = orientation;
+  if (!position.allFinite() || !q.coeffs().allFinite() || q.norm() < 1e-6f)
     throw ScanReadError(path + ": the file's viewpoint is not a valid pose");
   scan.pose.scanner_to_survey =
-      Eigen::Translation3d(origin.cast<double>()) * q.normalized().cast<double>();
+      Eigen::Translation3d(position.cast<double>()) * q.normalized().cast<double>();
   scan.pose_from_file = !scan.pose.scanner_to_survey.isApprox(Eigen::Isometry3d::Identity());
   scan.invalid_dropped = drop_invalid(*scan.points);
   if (scan.points->empty()) throw ScanReadError(path + ": holds no valid points");

@@ -3,9 +3,14 @@
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
 
+#include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
+#include <string>
 
 #include "semioctree/scan_io.h"
 #include "support/sample_trees.h"
@@ -166,6 +171,229 @@ TEST(ScanIo, TruncatedFilesAreRejected) {
     }
     EXPECT_EQ(rejected, 60) << src;
   }
+}
+
+}  // namespace
+}  // namespace semioctree
+
+namespace semioctree {
+namespace {
+
+// Headers whose counts the file cannot hold, or that PCL would misread: each
+// is a ScanReadError naming the file and the problem, found before PCL
+// allocates what the header claims (run under `ulimit -v` to be sure).
+std::string write_file(const std::filesystem::path& dir, const std::string& name,
+                       const std::string& bytes) {
+  const std::string path = (dir / name).string();
+  std::ofstream(path, std::ios::binary) << bytes;
+  return path;
+}
+
+void expect_rejected(const std::string& path, const std::string& problem) {
+  SCOPED_TRACE(path);
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    read_scans(path);
+    ADD_FAILURE() << "accepted";
+  } catch (const ScanReadError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find(path + ":"), std::string::npos) << message;
+    EXPECT_NE(message.find(problem), std::string::npos) << message;
+  }
+  const std::chrono::duration<double> took = std::chrono::steady_clock::now() - start;
+  EXPECT_LT(took.count(), 2.0);
+}
+
+std::string pcd_header(const std::string& width, const std::string& height,
+                       const std::string& points, const std::string& data) {
+  return "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH " +
+         width + "\nHEIGHT " + height + "\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + points + "\nDATA " +
+         data + "\n";
+}
+
+std::string ply_header(const std::string& format, const std::string& vertices) {
+  return "ply\nformat " + format + " 1.0\nelement vertex " + vertices +
+         "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+}
+
+TEST(ScanIoHeaders, HugePcdPointCountFailsFast) {
+  const auto dir = testing::temp_dir("huge-pcd");
+  const std::string big = "2000000000";
+  expect_rejected(write_file(dir, "bin.pcd", pcd_header(big, "1", big, "binary")),
+                  "2000000000 points need 24000000000 data bytes, the file has 0");
+  expect_rejected(
+      write_file(dir, "bin36.pcd", pcd_header(big, "1", big, "binary") + std::string(36, '\0')),
+      "the file has 36");
+  expect_rejected(write_file(dir, "ascii.pcd", pcd_header(big, "1", big, "ascii") + "1 2 3\n"),
+                  "2000000000 points need at least 11999999999 bytes of ASCII data");
+  expect_rejected(
+      write_file(dir, "over.pcd", pcd_header("99999999999", "1", "99999999999", "binary")),
+      "WIDTH 99999999999 is more than the 2147483647 points");
+  // Compressed sizes that agree with the header, but 8 bytes of LZF cannot
+  // expand to 1.2 MB.
+  std::string block(16, '\0');
+  const std::uint32_t sizes[2] = {8, 100000 * 12};
+  std::memcpy(block.data(), sizes, sizeof(sizes));
+  expect_rejected(
+      write_file(dir, "lzf.pcd", pcd_header("100000", "1", "100000", "binary_compressed") + block),
+      "8 compressed bytes cannot hold 100000 points");
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ScanIoHeaders, HugePlyVertexCountFailsFast) {
+  const auto dir = testing::temp_dir("huge-ply");
+  expect_rejected(write_file(dir, "bin.ply", ply_header("binary_little_endian", "2000000000")),
+                  "(vertex 2000000000) need at least 24000000000 data bytes, the file has 0");
+  expect_rejected(write_file(dir, "ascii.ply", ply_header("ascii", "2000000000") + "1 2 3\n"),
+                  "(vertex 2000000000) need at least 11999999999 bytes of ASCII data");
+  for (const char* format : {"ascii", "binary_little_endian"})
+    expect_rejected(
+        write_file(dir, std::string(format) + "-over.ply", ply_header(format, "99999999999")),
+        "element vertex 99999999999 is more than the 2147483647 points");
+  expect_rejected(write_file(dir, "neg.ply", ply_header("ascii", "-5") + "1 2 3\n"),
+                  "COUNT a non-negative integer, got 'element vertex -5'");
+  expect_rejected(write_file(dir, "zero.ply", ply_header("ascii", "0")),
+                  "holds no points (element vertex 0)");
+  // Counts of other elements are allocated too (PCL reserves range_grid rows).
+  expect_rejected(
+      write_file(dir, "grid.ply",
+                 "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\n"
+                 "property float y\nproperty float z\nelement range_grid 99999999999\n"
+                 "property list uchar int vertex_indices\nend_header\n" +
+                     std::string(12, '\0')),
+      "(vertex 1, range_grid 99999999999) need at least");
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ScanIoHeaders, PcdCountsMustBePositiveAndAgree) {
+  const auto dir = testing::temp_dir("pcd-counts");
+  const std::string data = "DATA ascii\n1 2 3\n";
+  auto pcd = [&](const char* name, const char* w, const char* h, const char* n) {
+    return write_file(dir, name, pcd_header(w, h, n, "ascii") + "1 2 3\n");
+  };
+  expect_rejected(pcd("neg.pcd", "-5", "1", "-5"), "WIDTH must be a positive integer, got '-5'");
+  expect_rejected(pcd("zero.pcd", "0", "1", "0"), "WIDTH must be a positive integer, got '0'");
+  expect_rejected(pcd("text.pcd", "abc", "1", "1"), "WIDTH must be a positive integer, got 'abc'");
+  expect_rejected(pcd("height.pcd", "1", "0", "1"), "HEIGHT must be a positive integer");
+  expect_rejected(pcd("points.pcd", "1", "1", "-1"), "POINTS must be a positive integer");
+  expect_rejected(pcd("product.pcd", "3", "2", "5"),
+                  "WIDTH x HEIGHT (3 x 2) is not its POINTS (5)");
+  expect_rejected(
+      write_file(dir, "nopoints.pcd", "VERSION 0.7\nFIELDS x y z\nWIDTH 1\nHEIGHT 1\n" + data),
+      "no POINTS");
+  expect_rejected(
+      write_file(dir, "order.pcd", "VERSION 0.7\nFIELDS x y z\nPOINTS 1\nWIDTH 1\n" + data),
+      "line 4: WIDTH is repeated or out of order");
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ScanIoHeaders, PcdAsciiJunkIsRejectedNamingTheLine) {
+  const auto dir = testing::temp_dir("pcd-junk");
+  const std::string header = pcd_header("2", "1", "2", "ascii");  // 11 lines
+  expect_rejected(write_file(dir, "junk.pcd", header + "1 2 3\nabc def ghi\n"),
+                  "junk.pcd:13: expected 3 numbers (the header's FIELDS and COUNT), got "
+                  "'abc def ghi'");
+  expect_rejected(write_file(dir, "short.pcd", header + "1 2\n4 5 6\n7 8 9\n"),
+                  "short.pcd:12: expected");
+  expect_rejected(write_file(dir, "long.pcd", header + "1 2 3\n\n4 5 6 7\n"), "long.pcd:14:");
+  expect_rejected(write_file(dir, "suffix.pcd", header + "1.5abc 2 3\n4 5 6\n"), "got '1.5abc");
+  expect_rejected(write_file(dir, "comment.pcd", header + "# two points\n1 2 3\n4 5 6\n"),
+                  "comment.pcd:12:");
+  expect_rejected(write_file(dir, "cut.pcd", header + "1 2 3\n"),
+                  "truncated or its POINTS is wrong");
+  expect_rejected(write_file(dir, "cut2.pcd", header + "1 2 3\n\n\n\n\n\n"),
+                  "truncated (1 of 2 points)");
+  // NaN and Inf are numbers: dropped and counted, as in binary files. Blank
+  // lines, extra blanks, CRLF and lines past POINTS are what PCL accepts too.
+  const auto path =
+      write_file(dir, "ok.pcd",
+                 pcd_header("4", "1", "4", "ascii") +
+                     "1  2 3\r\n\nnan 0 0\n 4\tinf +6 \n-1e0 .5 2.\nthe end, ignored by PCL\n");
+  const auto scans = read_scans(path);
+  ASSERT_EQ(scans.size(), 1u);
+  EXPECT_EQ(scans[0].points->size(), 2u);
+  EXPECT_EQ(scans[0].invalid_dropped, 2u);
+  EXPECT_FLOAT_EQ((*scans[0].points)[1].y, 0.5f);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ScanIoHeaders, HeadersPclWouldMisreadAreRejected) {
+  const auto dir = testing::temp_dir("misread");
+  // PCL's header loop reads on past DATA: this POINTS would replace the checked one.
+  expect_rejected(write_file(dir, "after.pcd",
+                             pcd_header("1", "1", "1", "binary") + "POINTS 2000000000\n" +
+                                 std::string(12, '\0')),
+                  "PCD header entry after the DATA line");
+  expect_rejected(write_file(dir, "long.pcd",
+                             "VERSION 0.7\n" + std::string(70000, '#') + "\n" +
+                                 pcd_header("1", "1", "1", "ascii") + "1 2 3\n"),
+                  "PCD header is longer than 64 KiB");
+  expect_rejected(write_file(dir, "text.pcd", "not a pcd"), "not a PCD header entry");
+  expect_rejected(write_file(dir, "text.ply", "ply\nformat ascii 1.0\n"), "no end_header");
+  // PCL converts coordinates of another type to 0.
+  expect_rejected(write_file(dir, "double.pcd",
+                             "FIELDS x y z\nSIZE 8 8 8\nTYPE F F F\nPOINTS 1\nDATA ascii\n1 2 3\n"),
+                  "PCD field x is not a 4-byte float");
+  expect_rejected(
+      write_file(dir, "double.ply",
+                 "ply\nformat ascii 1.0\nelement vertex 1\nproperty double x\nproperty double y\n"
+                 "property double z\nend_header\n1 2 3\n"),
+      "PLY vertex property x is double, not float");
+  expect_rejected(
+      write_file(dir, "list.ply",
+                 "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                 "property float z\nproperty list uint float h\nend_header\n1 2 3 1 4\n"),
+      "list property in the vertex element is not supported");
+  // PCL sizes its buffer by obj_info num_cols x num_rows, and sets the cloud's
+  // size from a camera element after reading the vertices.
+  expect_rejected(write_file(dir, "objinfo.ply",
+                             "ply\nformat ascii 1.0\nobj_info num_cols 20000\n"
+                             "obj_info num_rows 20000\nelement vertex 1\nproperty float x\n"
+                             "property float y\nproperty float z\nend_header\n1 2 3\n"),
+                  "obj_info num_cols x num_rows (20000 x 20000) is not the vertex count 1");
+  expect_rejected(
+      write_file(dir, "camera.ply",
+                 "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                 "property float z\nelement camera 1\nproperty int viewportx\n"
+                 "property int viewporty\nend_header\n1 2 3\n200000000 1\n"),
+      "cloud size, 200000000 x 1 points, does not match its data (1 points)");
+  std::filesystem::remove_all(dir);
+}
+
+// Every layout PCL's writers produce still reads, NaN points dropped and counted.
+TEST(ScanIoHeaders, PclWrittenFilesStillRead) {
+  const auto dir = testing::temp_dir("pcl-written");
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  Cloud c;
+  for (int i = 0; i < 2000; ++i)
+    c.push_back(i % 10 == 3 ? pcl::PointXYZ{nan, nan, nan}
+                            : pcl::PointXYZ{float(i), float(i % 7) - 3.f, 0.25f * float(i % 3)});
+  c.is_dense = false;
+  pcl::PLYWriter ply;
+  for (const bool organized : {false, true}) {
+    c.width = organized ? 40 : 2000;
+    c.height = organized ? 50 : 1;
+    const std::string o = organized ? "org-" : "";
+    pcl::io::savePCDFileASCII((dir / (o + "a.pcd")).string(), c);
+    pcl::io::savePCDFileBinary((dir / (o + "b.pcd")).string(), c);
+    pcl::io::savePCDFileBinaryCompressed((dir / (o + "c.pcd")).string(), c);
+    pcl::io::savePLYFileASCII((dir / (o + "a.ply")).string(), c);
+    pcl::io::savePLYFileBinary((dir / (o + "b.ply")).string(), c);
+    ply.write((dir / (o + "b-nocam.ply")).string(), c, true, false);
+  }
+  ply.write((dir / "org-a-nocam.ply").string(), c, false, false);
+  std::size_t files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    SCOPED_TRACE(entry.path().string());
+    const auto scans = read_scans(entry.path().string());
+    ASSERT_EQ(scans.size(), 1u);
+    EXPECT_EQ(scans[0].points->size(), 1800u);
+    EXPECT_EQ(scans[0].points->size() + scans[0].invalid_dropped, 2000u);
+    EXPECT_FLOAT_EQ((*scans[0].points)[1].y, -2.f);
+    ++files;
+  }
+  EXPECT_EQ(files, 13u);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -150,6 +150,13 @@ TEST(Cli, NonsenseValuesAreRefusedUpFrontWithTheirName) {
   r = run_cli("scene-info " + far);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("far away"), std::string::npos) << r.err;
+  const fs::path huge = scratch() / "huge.scene.json";
+  std::ofstream(huge) << "{\"format\": \"semioctree-scene\", \"version\": 1, \"walls\": "
+                         "[{\"from\": [0, 0], \"to\": [1e400, 0], \"z1\": 2}]}";
+  r = run_cli("scene-info " + huge.string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find(huge.string() + ": invalid JSON: number overflow"), std::string::npos)
+      << r.err;
   // A start the survey would refuse is not a valid scene either.
   const std::string blocked = variant("blocked", [](json& j) {
     j["robot"]["start"] = {0.2, 1.5};

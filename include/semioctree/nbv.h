@@ -110,6 +110,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -140,6 +141,9 @@ struct NbvParams {
   // score, the stop percentage and the blind zone of past scans.
   ScannerView limits;
   bool blind_zone_is_free = true;  // the blind-zone rule above (false: paper only)
+  // Called after each candidate is scored with (candidates scored, candidates),
+  // from the scoring threads: it must be thread-safe. Empty: no calls.
+  std::function<void(std::size_t, std::size_t)> progress;
 };
 
 struct NbvCandidate {

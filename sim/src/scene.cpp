@@ -513,6 +513,12 @@ Scene parse_scene_json(const std::string& text, const std::string& file_name,
     if (colon != std::string::npos) what = what.substr(colon);
     throw SceneError(file_name + ": invalid JSON at line " + std::to_string(line) + ", column " +
                      std::to_string(column) + ": " + what);
+  } catch (const json::out_of_range& e) {
+    // A number beyond a double (1e400); nlohmann gives no position for it.
+    std::string what = e.what();
+    const auto tail = what.find("number overflow");
+    throw SceneError(file_name +
+                     ": invalid JSON: " + (tail == std::string::npos ? what : what.substr(tail)));
   }
   SceneReader reader(file_name, base_dir);
   Scene scene = reader.read(root);
