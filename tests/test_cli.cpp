@@ -143,8 +143,9 @@ TEST(Cli, DiscretizeWritesEveryFile) {
 }
 
 // `classify` drops the returns outside the scanner's limits (a real scanner's
-// mount and robot) before mapping them, as `survey` and `nbv` do.
-TEST(Cli, ClassifyDropsReturnsOutsideTheScannerLimits) {
+// mount and robot) before mapping them, as `survey` and `nbv` do; so do
+// `discretize` and `compare`.
+TEST(Cli, MappingCommandsDropReturnsOutsideTheScannerLimits) {
   const auto dir = testing::temp_dir("cli-classify");
   Cloud::Ptr room = testing::synthetic_room(6, 4, 2.8, 0.04);
   for (int i = 0; i < 400; ++i) {  // a mount: a disc 0.1 m under the optical centre
@@ -158,14 +159,17 @@ TEST(Cli, ClassifyDropsReturnsOutsideTheScannerLimits) {
   }
   ASSERT_GT(outside, 400u);
   pcl::io::savePCDFileBinary((dir / "room.pcd").string(), *room);
-  const CliRun r =
-      run_cli("classify --cloud " + (dir / "room.pcd").string() +
-              " --pose 3,2,1.5,0 --leaf 0.1 --coarse 0.8 --out " + (dir / "out").string());
-  ASSERT_EQ(r.exit_code, 0) << r.all();
-  EXPECT_NE(r.all().find(std::to_string(outside) + " outside the scanner's limits dropped"),
-            std::string::npos)
-      << outside << "\n"
-      << r.all();
+  for (const std::string grid :
+       {"classify --leaf 0.1 --coarse 0.8", "discretize --leaf 0.1 --coarse 0.8",
+        "compare --leaves 0.1 --coarse 0.8"}) {
+    const CliRun r = run_cli(grid + " --cloud " + (dir / "room.pcd").string() +
+                             " --pose 3,2,1.5,0 --out " + (dir / "out").string());
+    ASSERT_EQ(r.exit_code, 0) << grid << "\n" << r.all();
+    EXPECT_NE(r.all().find(std::to_string(outside) + " outside the scanner's limits dropped"),
+              std::string::npos)
+        << grid << ": " << outside << "\n"
+        << r.all();
+  }
 }
 
 TEST(Cli, CompareWritesTablesAndChart) {

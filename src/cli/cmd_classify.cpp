@@ -36,7 +36,8 @@ void add_classify_command(CLI::App& app) {
       "and openings.json.");
   add_scan_source_options(*cmd, o->source,
                           "scanner pose X,Y,Z[,YAW_DEG] of each --cloud in the survey frame "
-                          "(default: the origin, or the pose stored in a PTX file)");
+                          "(default: the pose its file carries, a PTX header or a PCD "
+                          "viewpoint, else the origin)");
   add_grid_options(*cmd, o->disc);
   add_scanner_limit_options(*cmd, o->limits);
   cmd->add_option("--out", o->out, "output directory")->required();

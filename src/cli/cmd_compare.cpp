@@ -20,6 +20,7 @@ namespace semioctree::cli {
 void add_compare_command(CLI::App& app) {
   struct Options {
     ScanSource source;
+    ScannerView limits;
     std::vector<double> leaves = {0.4, 0.2, 0.1, 0.05};
     double coarse = 0.8;
     std::string out;
@@ -27,11 +28,14 @@ void add_compare_command(CLI::App& app) {
   auto o = std::make_shared<Options>();
   auto* cmd = app.add_subcommand(
       "compare",
-      "Discretize and classify one scan (doors, windows, occlusion study) with the semioctree "
+      "Discretize and classify the scans (one or more --cloud, placed by their poses, or --scene; "
+      "doors, windows, occlusion study) with the semioctree "
       "and with the homogeneous grid at several resolutions; write the paper's Table 1, Table 2 "
       "and Fig 15 (comparison.json, "
       "comparison.md, fig15_octants.png) and a slice image per run.");
-  add_scan_source_options(*cmd, o->source, "scanner pose X,Y,Z[,YAW_DEG] of the cloud");
+  add_scan_source_options(*cmd, o->source,
+                          "scanner pose X,Y,Z[,YAW_DEG] of each --cloud (default: the pose its "
+                          "file carries, else the origin)");
   cmd->add_option("--leaves", o->leaves, "leaf sizes to compare, metres")
       ->capture_default_str()
       ->delimiter(',')
@@ -39,9 +43,10 @@ void add_compare_command(CLI::App& app) {
   cmd->add_option("--coarse", o->coarse, "coarse voxel size of the semioctree, metres")
       ->check(finite_positive())
       ->capture_default_str();
+  add_scanner_limit_options(*cmd, o->limits);
   cmd->add_option("--out", o->out, "output directory")->required();
   cmd->callback([o] {
-    const PreparedCloud cloud = prepare(o->source, "compare");
+    const PreparedCloud cloud = prepare(o->source, "compare", &o->limits);
     std::vector<DiscretizationRun> runs;
     for (const char* method : {"semioctree", "homogeneous"}) {
       for (double leaf : o->leaves) {
@@ -58,7 +63,11 @@ void add_compare_command(CLI::App& app) {
         label_openings(*tree, detect_openings(*cloud.pre.cloud, cloud.pre.ceiling_height, *tree,
                                               cloud.scanners));
         std::vector<ScannerView> views;
-        for (const Point3& s : cloud.scanners) views.push_back(ScannerView{s});
+        for (const Point3& s : cloud.scanners) {
+          ScannerView v = o->limits;
+          v.position = s;
+          views.push_back(v);
+        }
         study_occlusion(*tree, views);
         DiscretizationRun run = describe_run(
             *tree, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());

@@ -16,6 +16,7 @@ void add_discretize_command(CLI::App& app) {
   struct Options {
     ScanSource source;
     DiscretizeParams disc;
+    ScannerView limits;
     std::string out;
     double slice_height = -1;
   };
@@ -23,18 +24,22 @@ void add_discretize_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "discretize",
       "Preprocess a scan (level, cut floor and ceiling, decimate) and discretize it into a "
-      "SemiOcTree (occupancy analysis). Writes semioctree.ot, labels_color.ot, occupancy.bt, "
+      "SemiOcTree (occupancy analysis). Returns outside the scanner's limits (--min-range, "
+      "--elevation-min: on a robot, the lowest elevation that clears its body) are dropped. "
+      "Writes semioctree.ot, labels_color.ot, occupancy.bt, "
       "slice.png and stats.json.");
   add_scan_source_options(*cmd, o->source,
                           "scanner pose X,Y,Z[,YAW_DEG] of each --cloud in the survey frame "
-                          "(default: the origin, or the pose stored in a PTX file)");
+                          "(default: the pose its file carries, a PTX header or a PCD "
+                          "viewpoint, else the origin)");
   add_grid_options(*cmd, o->disc);
+  add_scanner_limit_options(*cmd, o->limits);
   cmd->add_option("--out", o->out, "output directory")->required();
   cmd->add_option("--slice-height", o->slice_height,
                   "height of the slice image in metres above the floor (default: scanner height)");
   cmd->callback([o] {
     SemiOcTree::coarse_level_for(o->disc.leaf, o->disc.coarse);  // fail before reading anything
-    const PreparedCloud cloud = prepare(o->source, "discretize");
+    const PreparedCloud cloud = prepare(o->source, "discretize", &o->limits);
     const auto t0 = std::chrono::steady_clock::now();
     DiscretizeReport rep;
     const auto tree = discretize(*cloud.pre.cloud, cloud.pre.ceiling_height, o->disc, &rep);
