@@ -44,9 +44,6 @@ std::vector<Eigen::Vector3d> opening_corners(const Wall& w, const Opening& o) {
 
 namespace {
 
-// Largest magnitude of any number in a scene (metres, degrees): see as_number.
-constexpr double kMaxSceneNumber = 1e5;
-
 // Short rendering of a JSON value for "got ..." in messages.
 std::string show(const json& v) {
   std::string s = v.dump();
@@ -117,9 +114,6 @@ class SceneReader {
     if (!v.is_number()) fail(path, "must be a number, got " + show(v));
     const double x = v.get<double>();
     if (!std::isfinite(x)) fail(path, "must be a finite number, got " + show(v));
-    // Metres or degrees of a building: a larger value is a typo, and it would
-    // reach the ray caster (Embree rejects coordinates beyond ~1e18) or size
-    // grids by the extent.
     if (std::abs(x) > kMaxSceneNumber)
       fail(path, "must be within ±" + show(json(kMaxSceneNumber)) + ", got " + show(v));
     return x;

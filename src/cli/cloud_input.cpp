@@ -1,5 +1,6 @@
 #include "cloud_input.h"
 
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -86,7 +87,7 @@ void add_scan_source_options(CLI::App& cmd, ScanSource& src, const std::string& 
       ->check(CLI::ExistingFile)
       ->excludes(cloud_opt);
   cmd.add_option("--seed", src.seed, "scanner noise seed (with --scene)")
-      ->check(whole_in(0, 9223372036854775807))
+      ->check(seed_value())
       ->capture_default_str();
 #else
   (void)cloud_opt;
@@ -161,6 +162,12 @@ std::string source_name(const ScanSource& src) {
   return std::filesystem::path(src.scene.empty() ? src.input.files.front() : src.scene)
       .filename()
       .string();
+}
+
+bool has_extension(const std::string& path, const std::string& ext) {
+  std::string e = std::filesystem::path(path).extension().string();
+  for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return e == ext;
 }
 
 }  // namespace semioctree::cli

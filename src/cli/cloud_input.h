@@ -58,4 +58,7 @@ void add_grid_options(CLI::App& cmd, DiscretizeParams& grid);
 // The title of a slice image: the input file's name.
 std::string source_name(const ScanSource& src);
 
+// True if `path` ends in `ext` (".ply"), whatever the case.
+bool has_extension(const std::string& path, const std::string& ext);
+
 }  // namespace semioctree::cli

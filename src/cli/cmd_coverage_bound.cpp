@@ -145,7 +145,7 @@ void add_coverage_bound_command(CLI::App& app) {
                   "directory of cached coverage references (default: $XDG_CACHE_HOME/semioctree "
                   "or ~/.cache/semioctree)");
   cmd->add_option("--seed", a->seed, "range noise seed of the simulated scans")
-      ->check(whole_in(0, 9223372036854775807))
+      ->check(seed_value())
       ->capture_default_str();
   cmd->add_option("--threads", a->threads, "worker threads (0: one per core; at most 256)")
       ->check(thread_count())

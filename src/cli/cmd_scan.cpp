@@ -1,8 +1,6 @@
 // `semioctree scan`: one synthetic 360° scan of a scene, written as PCD or PLY.
-#include <cctype>
 #include <chrono>
 #include <cmath>
-#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -10,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "cloud_input.h"
 #include "commands.h"
 #include "option_checks.h"
 #include "progress_line.h"
@@ -48,8 +47,7 @@ sim::Pose2 parse_at(const std::string& text) {
     } catch (const std::exception&) {
       used = 0;
     }
-    // Beyond ±100 km a position is a typo (and Embree rejects rays from ~1e18 m).
-    if (used == 0 || used != item.size() || !std::isfinite(v) || std::abs(v) > 1e5)
+    if (used == 0 || used != item.size() || !std::isfinite(v) || std::abs(v) > sim::kMaxSceneNumber)
       throw std::runtime_error(
           "--at: expected X,Y or X,Y,YAW_DEG (numbers within ±100000, metres and degrees), got "
           "\"" +
@@ -60,12 +58,6 @@ sim::Pose2 parse_at(const std::string& text) {
     throw std::runtime_error("--at: expected X,Y or X,Y,YAW_DEG (2 or 3 numbers), got \"" + text +
                              "\"");
   return {values[0], values[1], values.size() == 3 ? values[2] : 0.0};
-}
-
-bool is_ply(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext == ".ply";
 }
 
 void run_scan(const ScanArgs& a) {
@@ -119,7 +111,7 @@ void run_scan(const ScanArgs& a) {
             << " z=" << scan.sensor_height << " yaw_deg=" << pose.yaw_deg
             << " in the file's viewpoint), " << seconds << " s\n";
   // PCL before 1.14 drops a PLY file's viewpoint on reading (PCL issue #5761).
-  if (is_ply(a.out))
+  if (has_extension(a.out, ".ply"))
     std::cout << "note: PCL 1.13 (Debian 12) does not read a PLY viewpoint back; give this "
                  "scan's pose to classify/nbv with --pose "
               << pose.x << "," << pose.y << "," << scan.sensor_height << "," << pose.yaw_deg
@@ -147,7 +139,7 @@ void add_scan_command(CLI::App& app) {
   cmd->add_option("--out", args->out, "output file, FILE.pcd or FILE.ply (binary)")->required();
   cmd->add_option("--seed", args->seed,
                   "seed of the range noise; the same seed gives the same file (default 1)")
-      ->check(whole_in(0, 9223372036854775807));
+      ->check(seed_value());
   cmd->add_option("--azimuth-step", args->azimuth_step,
                   "azimuth step in degrees (default: the scene's scanner.azimuth_step_deg, 0.2)")
       ->check(finite_in(0.001, 90));

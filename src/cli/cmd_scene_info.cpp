@@ -1,7 +1,5 @@
 // `semioctree scene-info FILE`: validate a scene and summarise it.
-#include <cctype>
 #include <cmath>
-#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -30,12 +28,6 @@ std::string xyz(const Eigen::Vector3d& p) {
   std::ostringstream os;
   os << std::fixed << std::setprecision(2) << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
   return os.str();
-}
-
-bool is_scene_json(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext == ".json";
 }
 
 void run_scene_info(const SceneInfoArgs& a) {
@@ -108,7 +100,7 @@ void run_scene_info(const SceneInfoArgs& a) {
     check_robot_start(scene, truth, plan, a.file);
     std::cout << "start:       on free floor, clear of obstacles by the robot's radius\n";
   } catch (const std::invalid_argument& e) {
-    if (is_scene_json(a.file)) throw;
+    if (has_extension(a.file, ".json")) throw;
     // A mesh or .bt (an object, a map) has no start of its own: inspecting it
     // is fine; say what a survey of it would need.
     std::cout << "start:       not usable for a survey: " << e.what() << "\n";
@@ -132,7 +124,7 @@ void add_scene_info_command(CLI::App& app) {
                   "robot start X,Y for a mesh or .bt scene (default 0,0); replaces robot.start")
       ->delimiter(',')
       ->expected(2)
-      ->check(finite_in(-100000, 100000));
+      ->check(finite_in(-sim::kMaxSceneNumber, sim::kMaxSceneNumber));
   cmd->add_option("--cell", args->cell, "cell size of the floor plan in metres (default 0.05)")
       ->check(finite_in(0.005, 10));
   cmd->callback([args] { run_scene_info(*args); });

@@ -76,11 +76,7 @@ void run_survey(const SurveyOptions& o) {
   p.map.limits.max_range = scene.scanner.max_range;
   p.map.limits.elevation_min_deg = scene.scanner.elevation_min_deg;
   p.map.limits.elevation_max_deg = scene.scanner.elevation_max_deg;
-  apply_planning_options(o.plan, p);
-  if (o.homogeneous) p.map.grid = {o.plan.leaf, o.plan.leaf, o.plan.coarse};
-  if (o.homogeneous && o.plan.level > 0)
-    throw std::invalid_argument("--level " + std::to_string(o.plan.level) +
-                                ": the homogeneous grid has one level, 0 (the leaf)");
+  apply_planning_options(o.plan, p, o.homogeneous);
   p.robot.radius = scene.robot.radius;
   p.robot.scanner_height = scene.scanner.height;
   if (o.homogeneous)
@@ -262,7 +258,7 @@ void add_survey_command(CLI::App& app) {
                 "use the homogeneous grid of leaf-size voxels (the paper's baseline) instead of "
                 "the semioctree");
   cmd->add_option("--seed", o->seed, "seed of the scanner noise and the odometry drift")
-      ->check(whole_in(0, 9223372036854775807))
+      ->check(seed_value())
       ->capture_default_str();
   cmd->add_option("--policy", o->policy,
                   "where to scan next: nbv (the best candidate) or random (a random feasible "
@@ -272,7 +268,7 @@ void add_survey_command(CLI::App& app) {
   cmd->add_option("--start", o->start, "robot start X,Y in the scene (default: the scene's)")
       ->delimiter(',')
       ->expected(2)
-      ->check(finite_in(-100000, 100000));
+      ->check(finite_in(-sim::kMaxSceneNumber, sim::kMaxSceneNumber));
   cmd->add_option("--cache", o->cache,
                   "directory of cached coverage references (default: $XDG_CACHE_HOME/semioctree "
                   "or ~/.cache/semioctree)");

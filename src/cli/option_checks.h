@@ -89,6 +89,11 @@ inline CLI::Validator zero_or_whole_in(long long lo, long long hi) {
       "", "zero_or_whole_in");
 }
 
+// A seed: any whole number from 0 (no sign tricks: "-1" is refused).
+inline CLI::Validator seed_value() {
+  return whole_in(0, std::numeric_limits<long long>::max());
+}
+
 // Worker threads: 0 (one per core) up to a bound far above any machine's cores;
 // each thread holds per-thread buffers, so a typo like 100000 must not pass.
 inline CLI::Validator thread_count() {

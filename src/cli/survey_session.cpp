@@ -85,17 +85,21 @@ void add_planning_options(CLI::App& cmd, PlanningOptions& o) {
       ->capture_default_str();
 }
 
-void apply_planning_options(const PlanningOptions& o, SessionParams& p) {
-  if (!(o.stop >= 0)) throw std::invalid_argument("--stop must be a percentage ≥ 0");
-  const unsigned k = SemiOcTree::coarse_level_for(o.leaf, o.coarse);  // L = r·2^k, or a clear error
+void apply_planning_options(const PlanningOptions& o, SessionParams& p, bool homogeneous) {
+  // L = r·2^k, or a clear error (the homogeneous grid's region snaps to L too);
+  // the homogeneous grid has one level.
+  const unsigned semioctree_k = SemiOcTree::coarse_level_for(o.leaf, o.coarse);
+  const unsigned k = homogeneous ? 0 : semioctree_k;
   if (o.level > int(k))
     throw std::invalid_argument("--level " + std::to_string(o.level) +
-                                " is finer than the leaf: --leaf and --coarse give levels 0 "
-                                "(coarse voxels) to " +
+                                " is finer than the leaf: the grid has levels 0 (coarse voxels) "
+                                "to " +
                                 std::to_string(k) + " (leaf)");
   if (o.level >= 0 && o.method != 2)
     throw std::invalid_argument("--level applies to --method 2 only");
-  p.map.grid = {o.leaf, o.coarse, 0.0};
+  // The homogeneous grid spans the same coarse-aligned region as the semioctree.
+  p.map.grid = homogeneous ? DiscretizeParams{o.leaf, o.leaf, o.coarse}
+                           : DiscretizeParams{o.leaf, o.coarse, 0.0};
   p.map.threads = o.threads;
   p.preprocess.target_points = o.target_points;
   p.nbv.method = o.method;
@@ -127,9 +131,7 @@ void clear_previous_survey(const std::string& dir) {
       fs::remove_all(e.path(), ec);
       if (ec)
         throw std::runtime_error(e.path().string() +
-                                 ": cannot remove the previous run's "
-                                 "output: " +
-                                 ec.message());
+                                 ": cannot remove the previous run's output: " + ec.message());
       ++removed;
     }
   }

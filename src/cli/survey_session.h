@@ -38,9 +38,10 @@ struct PlanningOptions {
   unsigned threads = 0;
 };
 void add_planning_options(CLI::App& cmd, PlanningOptions& o);
-// Fills `p` from them (the grid is the semioctree; the scanner limits are
-// set by the caller and copied to the NBV).
-void apply_planning_options(const PlanningOptions& o, SessionParams& p);
+// Fills `p` from them (the grid is the semioctree, or with `homogeneous` the
+// grid of leaf-size voxels; the scanner limits are set by the caller and
+// copied to the NBV). Throws std::invalid_argument on a --level the grid lacks.
+void apply_planning_options(const PlanningOptions& o, SessionParams& p, bool homogeneous = false);
 
 // One scan as it comes in: points in the scanner frame and the pose the
 // scanner's platform reports (odometry, or the pose a user gave).

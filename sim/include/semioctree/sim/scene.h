@@ -69,6 +69,11 @@ struct Cylinder {
   std::string name;
 };
 
+// Largest magnitude of any number in a scene, and of positions given for one
+// (metres, degrees): beyond it a value is a typo, and it would reach the ray
+// caster (Embree rejects coordinates beyond ~1e18) or size grids by the extent.
+constexpr double kMaxSceneNumber = 1e5;
+
 struct MeshInstance {
   std::string file;  // as written in the scene (relative to the scene file)
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
