@@ -267,8 +267,8 @@ TEST(Openings, LabSceneFromStartMatchesGroundTruth) {
       const Vec3 c = centre(d);
       std::printf("  detected %s at (%.2f, %.2f, %.2f) %.2f x %.2f, LOS %.2f, best IoU %.3f\n",
                   to_string(d.kind), c.x(), c.y(), c.z(), d.width, d.height, d.los_fraction, best);
-      EXPECT_GE(best, 0.3) << "seed " << seed << ": false positive " << to_string(d.kind)
-                           << " at (" << c.x() << ", " << c.y() << ", " << c.z() << ")";
+      EXPECT_GE(best, 0.3) << "seed " << seed << ": false positive " << to_string(d.kind) << " at ("
+                           << c.x() << ", " << c.y() << ", " << c.z() << ")";
     }
     for (const DetectedOpening& d : report.rejected) {
       const Vec3 c = centre(d);

@@ -216,6 +216,17 @@ TEST(Survey, WritesEveryOutputWithTheDocumentedSchema) {
   }
   EXPECT_GT(j["coverage"]["reference_points"].get<double>(), 1000);
   EXPECT_GT(j["coverage"]["percent"].get<double>(), 50.0);
+  // Every reference sample is covered, or missed in view of a scan, or hidden from all.
+  const json& missed = j["coverage"]["missed"];
+  EXPECT_EQ(j["coverage"]["covered"].get<std::size_t>() + missed["in_view"].get<std::size_t>() +
+                missed["hidden"].get<std::size_t>(),
+            j["coverage"]["reference_points"].get<std::size_t>());
+  EXPECT_NEAR(missed["in_view_percent"].get<double>() + missed["hidden_percent"].get<double>(),
+              100.0 - j["coverage"]["percent"].get<double>(), 1e-9);
+  ASSERT_TRUE(missed["parts"].is_array());
+  for (const json& part : missed["parts"])
+    EXPECT_EQ(part["part"].get<std::string>().find_first_of("["),
+              part["part"].get<std::string>().find_first_not_of("abcdefghijklmnopqrstuvwxyz"));
   EXPECT_TRUE(j["openings"].is_array());
 }
 

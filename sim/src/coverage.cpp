@@ -865,6 +865,86 @@ std::vector<bool> covered_samples(const CoverageReference& reference,
   return flags(reference, to_double(measured_points_world), tolerance);
 }
 
+std::string part_label(const Scene& scene, const PartRef& part) {
+  std::string label = std::string(to_string(part.kind)) + "[" + std::to_string(part.index) + "]";
+  const auto i = static_cast<std::size_t>(part.index);
+  std::string name;
+  if (part.kind == PartKind::box && i < scene.boxes.size()) name = scene.boxes[i].name;
+  if (part.kind == PartKind::cylinder && i < scene.cylinders.size()) name = scene.cylinders[i].name;
+  if (part.kind == PartKind::mesh && i < scene.meshes.size()) name = scene.meshes[i].file;
+  return name.empty() ? label : label + " (" + name + ")";
+}
+
+MissedSamples explain_missed_samples(const GroundTruth& truth, const CoverageReference& reference,
+                                     const std::vector<bool>& covered,
+                                     const std::vector<Eigen::Vector3d>& optical_centres,
+                                     unsigned threads) {
+  if (covered.size() != reference.visible.size())
+    throw std::invalid_argument("explain_missed_samples: one covered flag per reference sample");
+  const std::vector<SurfaceSample> samples = truth.surface_samples(reference.sample_spacing);
+  if (samples.size() != reference.sample_count)
+    throw std::invalid_argument("explain_missed_samples: the reference is of another scene");
+  std::vector<std::size_t> missed;
+  for (std::size_t i = 0; i < covered.size(); ++i)
+    if (!covered[i]) missed.push_back(i);
+
+  // The reference's rule, with the walls prepared once.
+  const Limits lim = limits_of(truth.scene().scanner);
+  const std::vector<WallSlab> walls = wall_slabs(truth.scene());
+  std::vector<std::vector<double>> centre_offsets;
+  for (const Eigen::Vector3d& c : optical_centres) {
+    centre_offsets.emplace_back(walls.size());
+    wall_offsets(walls, c, centre_offsets.back().data());
+  }
+  std::vector<std::uint8_t> in_view(missed.size(), 0);
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    std::vector<double> target_offsets(walls.size());
+    for (std::size_t m; (m = next.fetch_add(1)) < missed.size();) {
+      const SurfaceSample& s = samples[reference.visible[missed[m]]];
+      const Eigen::Vector3d target = target_of(s);
+      wall_offsets(walls, target, target_offsets.data());
+      for (std::size_t k = 0; k < optical_centres.size() && !in_view[m]; ++k) {
+        const Eigen::Vector3d& c = optical_centres[k];
+        in_view[m] = within_limits(lim, s, c) &&
+                     at_walls(walls, c, centre_offsets[k].data(), target, target_offsets.data(),
+                              false) != AtWalls::opening &&
+                     line_of_sight(truth, s, c);
+      }
+    }
+  };
+  const unsigned nt = std::min<unsigned>(
+      thread_count(threads), static_cast<unsigned>(std::max<std::size_t>(1, missed.size() / 256)));
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < nt; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+
+  MissedSamples out;
+  std::vector<MissedPart> parts;
+  auto part_of = [&](const PartRef& p) -> MissedPart& {
+    for (MissedPart& q : parts)
+      if (q.part.kind == p.kind && q.part.index == p.index) return q;
+    parts.push_back({p, part_label(truth.scene(), p), 0, 0});
+    return parts.back();
+  };
+  for (std::size_t m = 0; m < missed.size(); ++m) {
+    MissedPart& part = part_of(samples[reference.visible[missed[m]]].part);
+    if (in_view[m]) {
+      ++out.in_view;
+      ++part.in_view;
+    } else {
+      ++out.hidden;
+      ++part.hidden;
+    }
+  }
+  std::stable_sort(parts.begin(), parts.end(), [](const MissedPart& a, const MissedPart& b) {
+    return a.in_view + a.hidden > b.in_view + b.hidden;
+  });
+  out.parts = std::move(parts);
+  return out;
+}
+
 namespace {
 
 // The sets as 64-bit words: the plan searches take unions and counts of them many times.

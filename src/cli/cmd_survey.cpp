@@ -44,6 +44,17 @@ double since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// survey.json lists the scene elements with the most missed samples, not all of them.
+constexpr std::size_t kMissedPartsListed = 8;
+
+sim::Coverage count_covered(const std::vector<bool>& covered) {
+  sim::Coverage c;
+  c.reference_points = covered.size();
+  for (bool f : covered) c.covered += f;
+  c.percent = c.reference_points ? 100.0 * double(c.covered) / double(c.reference_points) : 0.0;
+  return c;
+}
+
 nlohmann::json true_pose_json(const sim::Scan& s) {
   return pose_json(s.sensor_to_world());
 }
@@ -88,7 +99,8 @@ void run_survey(const SurveyOptions& o) {
   sim::Robot robot(scene.robot, o.seed);
   std::mt19937_64 choice(o.seed);  // --policy random
   SurveySession session(p);
-  std::vector<Eigen::Vector3f> measured;  // every registered point, world frame (coverage)
+  std::vector<Eigen::Vector3f> measured;         // every registered point, world frame (coverage)
+  std::vector<Eigen::Vector3d> optical_centres;  // true, world frame (why samples were missed)
   Eigen::Isometry3d survey_to_world = Eigen::Isometry3d::Identity();
   std::string stopped_because = "max_scans";
   nlohmann::json pose_errors = nlohmann::json::array();
@@ -174,6 +186,7 @@ void run_survey(const SurveyOptions& o) {
     if (!o.skip_coverage) {
       const Eigen::Affine3f to_world = (survey_to_world * r.scanner_to_survey).cast<float>();
       for (const Eigen::Vector3f& q : s.points) measured.push_back(to_world * q);
+      optical_centres.push_back(truth_pose.translation());
     }
 
     if (!r.nbv) {
@@ -216,16 +229,42 @@ void run_survey(const SurveyOptions& o) {
     const auto t0 = std::chrono::steady_clock::now();
     const std::string cache = o.cache.empty() ? sim::default_cache_dir() : o.cache;
     const sim::CoverageReference ref = sim::load_or_compute_coverage_reference(truth, cache);
-    const sim::Coverage c = sim::measure_coverage(ref, measured);
+    const std::vector<bool> covered = sim::covered_samples(ref, measured);
+    const sim::Coverage c = count_covered(covered);
+    const sim::MissedSamples missed =
+        sim::explain_missed_samples(truth, ref, covered, optical_centres, o.plan.threads);
+    auto percent_of = [&](std::size_t n) {
+      return c.reference_points ? 100.0 * double(n) / double(c.reference_points) : 0.0;
+    };
+    nlohmann::json parts = nlohmann::json::array();
+    for (std::size_t k = 0; k < missed.parts.size() && k < kMissedPartsListed; ++k) {
+      const sim::MissedPart& mp = missed.parts[k];
+      parts.push_back({{"part", mp.label},
+                       {"in_view_percent", percent_of(mp.in_view)},
+                       {"hidden_percent", percent_of(mp.hidden)}});
+    }
     extra["coverage"] = {{"reference_points", c.reference_points},
                          {"covered", c.covered},
                          {"percent", c.percent},
-                         {"reference_cached", ref.from_cache}};
+                         {"reference_cached", ref.from_cache},
+                         {"missed",
+                          {{"in_view", missed.in_view},
+                           {"in_view_percent", percent_of(missed.in_view)},
+                           {"hidden", missed.hidden},
+                           {"hidden_percent", percent_of(missed.hidden)},
+                           {"parts", parts}}}};
     std::printf(
         "coverage: %zu of %zu reference surface samples within 3 cm of a point: %.2f %% "
         "(reference %s) [%.2f s]\n",
         c.covered, c.reference_points, c.percent, ref.from_cache ? "from the cache" : "computed",
         since(t0));
+    std::printf(
+        "  missed: %.2f %% in view of a scan but sampled too sparsely there, %.2f %% hidden "
+        "from every scan\n",
+        percent_of(missed.in_view), percent_of(missed.hidden));
+    for (std::size_t k = 0; k < missed.parts.size() && k < 3; ++k)
+      std::printf("    %s: %.2f %% in view, %.2f %% hidden\n", missed.parts[k].label.c_str(),
+                  percent_of(missed.parts[k].in_view), percent_of(missed.parts[k].hidden));
   }
   extra["seconds_total"] = since(t_start);
   session.write_survey_json(stopped_because, extra);

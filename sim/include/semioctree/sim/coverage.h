@@ -118,6 +118,35 @@ std::vector<bool> covered_samples(const CoverageReference& reference,
                                   const std::vector<Eigen::Vector3f>& measured_points_world,
                                   double tolerance = 0.03);
 
+// Why a survey missed the reference samples it did not cover, from the optical centres of
+// its scans (world frame, true poses). A missed sample is either in view of some scan (the
+// reference's rule, sample_visible_from: facing it, within the scanner's limits, nothing in
+// the way) and so sampled too sparsely there, too far or too oblique for the angular step;
+// or hidden from every scan: the survey never stood where it could be seen. Per scene
+// element too, so that a survey's misses can be found in the scene.
+struct MissedPart {
+  PartRef part;
+  std::string label;  // the element's place in the scene file, e.g. "boxes[2] (bench-3)"
+  std::size_t in_view = 0;
+  std::size_t hidden = 0;
+};
+struct MissedSamples {
+  std::size_t in_view = 0;
+  std::size_t hidden = 0;
+  std::vector<MissedPart> parts;  // elements with missed samples, most missed first
+};
+
+// `covered` is covered_samples of the survey's points (one flag per reference sample).
+// Throws std::invalid_argument if it does not match the reference, or if the reference was
+// not made from this scene's samples (their count differs).
+MissedSamples explain_missed_samples(const GroundTruth& truth, const CoverageReference& reference,
+                                     const std::vector<bool>& covered,
+                                     const std::vector<Eigen::Vector3d>& optical_centres,
+                                     unsigned threads = 0);
+
+// "boxes[2] (bench-3)": where a scene element is in the scene file, with its name if any.
+std::string part_label(const Scene& scene, const PartRef& part);
+
 // Survey plans made with perfect knowledge of what each scan position would cover: an
 // upper reference for a planner that only knows what it has scanned so far.
 // `covered[v]` holds the covered_samples of a scan from position v (all the same size).
