@@ -1,5 +1,6 @@
 # Tests of the pipeline stages (include/semioctree/, src/).
-foreach(t test_preprocess test_scan_io test_discretize test_occlusion test_update test_outputs)
+foreach(t test_preprocess test_scan_io test_discretize test_occlusion test_update test_outputs
+          test_figures)
   if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/${t}.cpp)
     semioctree_add_test(${t} SOURCES ${t}.cpp LIBS semioctree)
     target_include_directories(${t} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
@@ -29,4 +30,7 @@ if(TARGET semioctree_sim)
   semioctree_add_test(test_survey SOURCES test_survey.cpp LIBS nlohmann_json::nlohmann_json)
   target_include_directories(test_survey PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
   add_dependencies(test_survey semioctree_cli)
+endif()
+if(TARGET test_figures)
+  target_link_libraries(test_figures PRIVATE nlohmann_json::nlohmann_json)
 endif()

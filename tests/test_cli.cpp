@@ -9,10 +9,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 #include <string>
 
+#include "semioctree/octomap_ext/export.h"
 #include "semioctree/octomap_ext/file_io.h"
 #include "support/cli_run.h"
 #include "support/sample_trees.h"
@@ -73,9 +76,20 @@ TEST(Cli, ExportWritesFilesThatReadBack) {
       run_cli("export " + ot.string() + " --color " + (dir / "c.ot").string() + " --bt " +
               (dir / "o.bt").string() + " --ply " + (dir / "p.ply").string());
   ASSERT_EQ(r.exit_code, 0) << r.all();
-  EXPECT_EQ(read_tree_file((dir / "c.ot").string()).type, "ColorOcTree");
-  EXPECT_TRUE(read_tree_file((dir / "o.bt").string()).binary);
-  EXPECT_GT(fs::file_size(dir / "p.ply"), 1000u);
+  // The files hold what the library's exports of the same tree hold.
+  const TreeFile color = read_tree_file((dir / "c.ot").string());
+  EXPECT_EQ(color.type, "ColorOcTree");
+  EXPECT_EQ(color.tree->size(), to_color_octree(t)->size());
+  const TreeFile bt = read_tree_file((dir / "o.bt").string());
+  EXPECT_TRUE(bt.binary);
+  EXPECT_EQ(bt.tree->size(), to_occupancy_octree(t)->size());
+  std::size_t labelled = 0;  // the PLY: one vertex per octant that is not unknown
+  t.for_each_octant([&](const Octant& o) { labelled += o.label() != Label::kUnknown; });
+  std::ifstream ply(dir / "p.ply", std::ios::binary);
+  std::string line, header;
+  while (std::getline(ply, line) && line != "end_header") header += line + "\n";
+  EXPECT_NE(header.find("element vertex " + std::to_string(labelled) + "\n"), std::string::npos)
+      << header;
   const CliRun info = run_cli("info " + (dir / "o.bt").string());
   EXPECT_EQ(info.exit_code, 0) << info.all();
   EXPECT_NE(info.all().find("binary .bt"), std::string::npos) << info.all();
@@ -182,12 +196,43 @@ TEST(Cli, CompareWritesTablesAndChart) {
   for (const char* f : {"comparison.json", "comparison.md", "fig15_octants.png",
                         "slice_semioctree_0.1.png", "slice_homogeneous_0.1.png"})
     EXPECT_TRUE(fs::exists(dir / "cmp" / f)) << f;
+  // The images decode: PNG signature and a non-empty IHDR.
+  for (const char* f : {"fig15_octants.png", "slice_semioctree_0.1.png"}) {
+    std::ifstream png(dir / "cmp" / f, std::ios::binary);
+    unsigned char head[24] = {};
+    png.read(reinterpret_cast<char*>(head), sizeof head);
+    EXPECT_EQ(std::string(reinterpret_cast<char*>(head + 1), 3), "PNG") << f;
+    const auto be32 = [&](int at) {
+      return (unsigned(head[at]) << 24) | (unsigned(head[at + 1]) << 16) |
+             (unsigned(head[at + 2]) << 8) | unsigned(head[at + 3]);
+    };
+    EXPECT_GT(be32(16), 100u) << f;  // width
+    EXPECT_GT(be32(20), 100u) << f;  // height
+  }
   std::ifstream js(dir / "cmp" / "comparison.json");
   const auto j = nlohmann::json::parse(js);
   // Homogeneous over the same region at every resolution: each halving is ×8.
   for (double f : j["table2"]["homogeneous"]["factors"]) EXPECT_DOUBLE_EQ(f, 8.0);
+  // The semioctree refines only near surfaces: each halving multiplies its octants by
+  // less than the homogeneous grid's 8 (surfaces scale by ~4).
+  for (double f : j["table2"]["semioctree"]["factors"]) {
+    EXPECT_LT(f, 8.0);
+    EXPECT_GT(f, 1.0);
+  }
   EXPECT_LT(j["table2"]["semioctree"]["average"].get<double>(), 6.0);
-  EXPECT_EQ(j["table1"].size(), 6u);
+  // Table 1: both methods at each of the three leaves, the six classes' volumes adding
+  // up to the whole.
+  ASSERT_EQ(j["table1"].size(), 6u);
+  std::map<std::string, std::set<double>> leaves;
+  for (const auto& row : j["table1"]) {
+    leaves[row["method"].get<std::string>()].insert(row["leaf"].get<double>());
+    double sum = 0;
+    for (const auto& v : row["volume_percent"]) sum += v.get<double>();
+    EXPECT_NEAR(sum, 100.0, 1e-6) << row.dump();
+  }
+  const std::set<double> expected{0.4, 0.2, 0.1};
+  EXPECT_EQ(leaves["semioctree"], expected);
+  EXPECT_EQ(leaves["homogeneous"], expected);
   std::ifstream md(dir / "cmp" / "comparison.md");
   std::stringstream mds;
   mds << md.rdbuf();

@@ -418,6 +418,11 @@ TEST(Coverage, CountsSamplesWithAPointWithinTheTolerance) {
   std::vector<Eigen::Vector3f> as_float;
   for (const auto& p : measured) as_float.push_back(p.cast<float>());
   EXPECT_EQ(measure_coverage(ref, as_float, 0.0285).covered, 3u);
+  // The flags behind those counts, sample by sample.
+  EXPECT_EQ(covered_samples(ref, as_float),
+            (std::vector<bool>{true, true, true, true, false, true}));
+  EXPECT_EQ(covered_samples(ref, as_float, 0.0285),
+            (std::vector<bool>{false, true, true, true, false, false}));
   EXPECT_EQ(measure_coverage(CoverageReference{}, measured).percent, 0.0);
 }
 

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -26,6 +27,7 @@
 #ifdef SEMIOCTREE_HAVE_SIM
 #include "semioctree/openings.h"
 #include "semioctree/preprocess.h"
+#include "semioctree/sim/ground_truth.h"
 #include "support/lab_scan.h"
 #endif
 
@@ -296,6 +298,64 @@ double reference_score(const SemiOcTree& t, const Point3& a, const ScannerView& 
     sum += double(std::uint64_t(1) << (3 * (t.coarse_level() - o.level))) / (1.0 + n);
   });
   return sum;
+}
+
+// Method 3 by brute force: per occluded octant, the free faces (the octant a quarter
+// leaf beyond the face's centre is empty, scan or nbv) that have `a` beyond their plane,
+// each worth the face's area, when the line to the centre is not blocked.
+double reference_score_method3(const SemiOcTree& t, const Point3& a, const ScannerView& lim) {
+  double sum = 0;
+  t.for_each_octant([&](const Octant& o) {
+    if (o.label() != Label::kOccluded) return;
+    const Point3& b = o.center;
+    const double half = 0.5 * o.size;
+    int faces = 0;
+    for (int axis = 0; axis < 3; ++axis)
+      for (double side : {-1.0, 1.0}) {
+        if ((a[axis] - b[axis]) * side <= half) continue;  // the face does not face a
+        Point3 q = b;
+        (axis == 0 ? q.x : axis == 1 ? q.y : q.z) += side * (half + 0.25 * t.leaf_size());
+        const auto nb = t.find_octant(q);
+        if (nb && (nb->label() == Label::kEmpty || nb->label() == Label::kScan ||
+                   nb->label() == Label::kNbv))
+          ++faces;
+      }
+    if (faces == 0) return;
+    const double dx = b.x - a.x, dy = b.y - a.y, dz = b.z - a.z;
+    const double range = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (range < lim.min_range || range > lim.max_range || range == 0) return;
+    const double elevation = std::asin(dz / range) * 180 / M_PI;
+    if (elevation < lim.elevation_min_deg || elevation > lim.elevation_max_deg) return;
+    const auto steps = testing::reference_traversal(t, a, b);
+    for (std::size_t j = 1; j < steps.size(); ++j) {
+      const auto oc = t.find_octant(steps[j].key);
+      const Label l = steps[j].has_node && oc ? oc->label() : Label::kUnknown;
+      if (l == Label::kOccupied || l == Label::kUnknown || l == Label::kDoor || l == Label::kWindow)
+        return;
+    }
+    sum += faces * o.size * o.size;
+  });
+  return sum;
+}
+
+TEST(Nbv, Method3ScoresMatchBruteForceReference) {
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const RandomMap m(seed);
+    const auto positions = random_positions(200 + seed, 6);
+    const NbvParams p = open_limits(3);
+    ScoringStats st;
+    const auto scores = score_positions(m.t, positions, p, &st);
+    EXPECT_GT(st.visible, 0u);
+    EXPECT_GT(st.blocked_by_cache, 0u);
+    double total = 0;
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+      EXPECT_NEAR(scores[i], reference_score_method3(m.t, positions[i], p.limits),
+                  1e-9 * std::max(1.0, scores[i]))
+          << "seed " << seed << " position " << i;
+      total += scores[i];
+    }
+    EXPECT_GT(total, 0.0);
+  }
 }
 
 TEST(Nbv, ScoresMatchBruteForceReference) {
@@ -707,8 +767,14 @@ TEST(NbvLab, FirstScanHasAFeasibleBestCandidateInTheRoom) {
   tree->compact();
   RobotGeometry robot;
   robot.scanner_height = start.z;
+  NbvParams params;
+  std::atomic<std::size_t> progress_calls{0}, last_done{0}, last_total{0};
+  params.progress = [&](std::size_t done, std::size_t total) {
+    ++progress_calls;
+    if (done == total) last_done = done, last_total = total;
+  };
   const auto t0 = std::chrono::steady_clock::now();
-  const NbvResult r = next_best_view(*tree, robot, start, {start}, NbvParams{});
+  const NbvResult r = next_best_view(*tree, robot, start, {start}, params);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ASSERT_TRUE(r.best.has_value());
@@ -721,13 +787,29 @@ TEST(NbvLab, FirstScanHasAFeasibleBestCandidateInTheRoom) {
   EXPECT_GE(std::hypot(b.x - start.x, b.y - start.y), 0.5);
   EXPECT_GT(r.best->score, 0.0);
   EXPECT_GT(r.stop_percent, 0.1);
-  // Every candidate is in the main room too (doors are narrower than the robot).
+  // Every candidate is in the main room too (doors are narrower than the robot), and
+  // the robot can really stand there: the map's cylinder test is stricter than the
+  // scene's (radius + leaf/2, occluded space counts as an obstacle).
+  const sim::GroundTruth truth(
+      sim::load_scene(std::string(SEMIOCTREE_SOURCE_DIR) + "/sim/scenes/lab.scene.json"));
+  const Eigen::Isometry3d to_world = pre.transform.inverse();
+  double best_score = 0;
   for (const NbvCandidate& c : r.candidates) {
     EXPECT_GT(c.position.x, 0.0);
     EXPECT_LT(c.position.x, 10.4);
     EXPECT_GT(c.position.y, 0.0);
     EXPECT_LT(c.position.y, 8.5);
+    const Eigen::Vector3d w = to_world * Eigen::Vector3d(c.position.x, c.position.y, c.position.z);
+    EXPECT_TRUE(truth.standing_free(w.head<2>())) << w.transpose();
+    best_score = std::max(best_score, c.score);
   }
+  // The best is the highest score, and scoring it alone gives the same.
+  EXPECT_EQ(r.best->score, best_score);
+  EXPECT_DOUBLE_EQ(score_positions(*tree, {b}, NbvParams{}).at(0), r.best->score);
+  // Progress: once per candidate, the last call (n, n).
+  EXPECT_EQ(progress_calls.load(), r.candidates.size());
+  EXPECT_EQ(last_done.load(), r.candidates.size());
+  EXPECT_EQ(last_total.load(), r.candidates.size());
   // Printed for information only (shared machine): nothing is asserted on time.
   std::printf(
       "lab NBV: %zu grid points, %zu candidates, %zu occluded targets, %zu segments (%zu "

@@ -151,6 +151,17 @@ TEST(Occlusion, SpaceSeenThroughADoorIsOut) {
   EXPECT_EQ(label_at(*tree, Point3(3.0, 0.3, 1.0)), Label::kOccluded);  // behind the wall
   EXPECT_EQ(label_at(*tree, Point3(1.0, 0.5, 1.0)), Label::kEmpty);     // this side
   EXPECT_EQ(label_at(*tree, Point3(2.025, 2.0, 1.0)), Label::kDoor);    // doors stay doors
+  // point_visibility is the rule behind those labels, for any point and the best view.
+  const ScannerView here{Point3(1.0, 2.0, 1.2)}, beyond{Point3(3.0, 0.5, 1.2)};
+  EXPECT_EQ(point_visibility(*tree, {here}, Point3(3.0, 2.0, 1.0)), Visibility::kThroughOpening);
+  EXPECT_EQ(point_visibility(*tree, {here}, Point3(1.0, 0.5, 1.0)), Visibility::kDirect);
+  EXPECT_EQ(point_visibility(*tree, {here}, Point3(3.0, 0.3, 1.0)), Visibility::kHidden);
+  EXPECT_EQ(point_visibility(*tree, {}, Point3(1.0, 0.5, 1.0)), Visibility::kHidden);
+  // The best of several views: a position on the far side sees both points directly.
+  EXPECT_EQ(point_visibility(*tree, {here, beyond}, Point3(3.0, 2.0, 1.0)), Visibility::kDirect);
+  EXPECT_EQ(point_visibility(*tree, {beyond, here}, Point3(3.8, 0.3, 1.0)), Visibility::kDirect);
+  EXPECT_EQ(point_visibility(*tree, {beyond}, Point3(3.0, 0.3, 1.5)),
+            Visibility::kHidden);  // < 0.6 m
 
   // A second position beyond the door, with a short range: its direct view
   // wins over `out` and `occluded`; what it cannot reach keeps what the first

@@ -6,6 +6,8 @@
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <set>
+#include <tuple>
 
 #include "semioctree/preprocess.h"
 #include "support/synthetic_clouds.h"
@@ -64,6 +66,14 @@ TEST(Preprocess, RemovesFloorAndCeilingWithinTwoSigma) {
   }
 }
 
+std::size_t distinct_cells(const Cloud& c, double spacing) {
+  std::set<std::tuple<long, long, long>> cells;
+  for (const auto& p : c)
+    cells.emplace(long(std::floor(p.x / spacing)), long(std::floor(p.y / spacing)),
+                  long(std::floor(p.z / spacing)));
+  return cells.size();
+}
+
 TEST(Preprocess, DecimatesToSpacingOrTargetCount) {
   const auto room = testing::synthetic_room(8, 6, 3, 0.01, 0.002);
   PreprocessParams p;
@@ -73,9 +83,20 @@ TEST(Preprocess, DecimatesToSpacingOrTargetCount) {
   EXPECT_LE(r.output_points, 50000u);
   EXPECT_GE(r.output_points, 35000u);
   EXPECT_GT(r.decimation_spacing, 0.0);
-  // Spacing: no two kept points share a cell of that size.
-  const auto d = decimate(*r.cloud, 0.05);
-  EXPECT_LT(d->size(), r.cloud->size());
+  // One point per cell of the spacing used (PCL UniformSampling's world-aligned cells).
+  EXPECT_EQ(distinct_cells(*r.cloud, r.decimation_spacing), r.cloud->size());
+  EXPECT_EQ(decimate(*r.cloud, r.decimation_spacing)->size(), r.cloud->size());
+
+  // A minimum spacing instead of a target count: again one point per cell of it, and
+  // every cell of the cut cloud keeps one.
+  PreprocessParams q;
+  q.min_spacing = 0.05;
+  const PreprocessResult m = preprocess(*room, q);
+  EXPECT_DOUBLE_EQ(m.decimation_spacing, 0.05);
+  EXPECT_EQ(m.output_points, m.cloud->size());
+  EXPECT_EQ(distinct_cells(*m.cloud, 0.05), m.cloud->size());
+  EXPECT_LT(m.output_points, m.after_cut / 10);  // 1 cm grid → 5 cm cells: ~1/25 on a plane
+  EXPECT_GT(m.output_points, m.after_cut / 50);
 }
 
 TEST(Preprocess, ClearErrors) {

@@ -27,6 +27,29 @@ std::map<OctantId, std::tuple<Label, float, std::uint8_t, std::uint16_t>> octant
   return m;
 }
 
+// The coarse index (a hash map) must agree with the tree itself: every octant
+// octant_map found by walking from the root is found again through the index,
+// and the index holds exactly the coarse nodes the tree walk hands over.
+void expect_index_agrees(
+    const SemiOcTree& t,
+    const std::map<OctantId, std::tuple<Label, float, std::uint8_t, std::uint16_t>>& m) {
+  for (const auto& [id, value] : m) {
+    const auto& [x, y, z, level] = id;
+    const auto o = t.find_octant(octomap::OcTreeKey(x, y, z));
+    ASSERT_TRUE(o) << "no octant at key " << x << " " << y << " " << z;
+    EXPECT_EQ(o->level, level) << "key " << x << " " << y << " " << z;
+    EXPECT_EQ(o->label(), std::get<0>(value)) << "key " << x << " " << y << " " << z;
+    EXPECT_EQ(o->node->getLogOdds(), std::get<1>(value));
+    EXPECT_EQ(o->node->aux(), std::get<3>(value));
+  }
+  std::size_t coarse = 0;
+  t.for_each_coarse([&](const CoarseIndex& c, const SemiOcTreeNode* node) {
+    ++coarse;
+    EXPECT_EQ(t.find_coarse(c), node) << "coarse " << c.x << " " << c.y << " " << c.z;
+  });
+  EXPECT_EQ(coarse, t.coarse_count());
+}
+
 octomap::OcTreeKey key_at(const SemiOcTree& t, double x, double y, double z) {
   octomap::OcTreeKey k;
   EXPECT_TRUE(t.key_of({x, y, z}, k));
@@ -80,10 +103,24 @@ TEST(SemiOcTree, CoarseGridIsAlignedToTheWorld) {
       if (n % 3 == 1) p.x = cell(rng) * coarse;
       CoarseIndex c;
       ASSERT_TRUE(t.coarse_index_of(p, c));
-      // Consistent with the leaf key: the coarse index is the key shifted by k.
+      // Consistent with the leaf key. Leaf cell j = key − 2^15 is [j r, (j+1) r)
+      // (OctoMap's key origin) and a coarse voxel spans 2^k leaf cells, so on
+      // every axis i = floor(j / 2^k), and coarse_key(c), the voxel's
+      // min-corner key, is 2^15 + i·2^k: the first leaf cell of the voxel.
       octomap::OcTreeKey key;
       ASSERT_TRUE(t.key_of(p, key));
-      EXPECT_EQ(c.x, int(key.k[0] >> t.coarse_level()) - int(32768 >> t.coarse_level()));
+      const int cells = 1 << t.coarse_level();
+      const octomap::OcTreeKey ck = t.coarse_key(c);
+      for (int a = 0; a < 3; ++a) {
+        const int ci = a == 0 ? c.x : (a == 1 ? c.y : c.z);
+        const int j = int(key.k[a]) - 32768;
+        const int floor_div = j >= 0 ? j / cells : -((-j + cells - 1) / cells);
+        EXPECT_EQ(ci, floor_div) << "axis " << a << " key " << key.k[a];
+        EXPECT_EQ(int(ck.k[a]), 32768 + ci * cells) << "axis " << a;
+        // The min-corner cell starts at iL.
+        EXPECT_NEAR(t.keyToCoord(ck.k[a]) - 0.5 * leaf, ci * coarse, 1e-9) << "axis " << a;
+      }
+      EXPECT_EQ(t.coarse_index(ck), c);
       // The point lies in [iL, (i+1)L); exact when L is exact in binary.
       const double tol = (coarse == 1.0) ? 0.0 : 1e-9;
       for (int a = 0; a < 3; ++a) {
@@ -133,12 +170,14 @@ TEST(SemiOcTree, SetLabelAtAnyLevelAndSplit) {
 
   t.split(key, 0);  // children inherit the label
   o = t.find_octant(key);
+  ASSERT_TRUE(o);
   EXPECT_EQ(o->level, 1u);
   EXPECT_EQ(o->label(), Label::kEmpty);
   EXPECT_EQ(t.statistics().at_level(1), 8u);
 
   t.set_label(key, 4, Label::kOccupied);  // a leaf: splits levels 1..3 on the way
   o = t.find_octant(key);
+  ASSERT_TRUE(o);
   EXPECT_EQ(o->level, 4u);
   EXPECT_DOUBLE_EQ(o->size, 0.05);
   EXPECT_EQ(o->label(), Label::kOccupied);
@@ -205,6 +244,8 @@ TEST(SemiOcTree, CompactKeepsEveryOctant) {
   const auto before = octant_map(t);
   t.compact();
   EXPECT_EQ(octant_map(t), before);
+  // compact() moves every node: the coarse index must point at the new ones.
+  expect_index_agrees(t, before);
   EXPECT_EQ(t.size(), t.calcNumNodes());
   const auto o = t.find_octant(Point3(0.01, 0.01, 0.01));
   ASSERT_TRUE(o);
@@ -232,7 +273,10 @@ TEST(SemiOcTree, OtRoundTripIsLossless) {
   EXPECT_EQ(back->coarse_level(), t.coarse_level());
   EXPECT_EQ(back->coarse_count(), t.coarse_count());
   EXPECT_EQ(back->size(), t.size());
-  EXPECT_EQ(octant_map(*back), octant_map(t));
+  const auto original = octant_map(t);
+  EXPECT_EQ(octant_map(*back), original);
+  // The coarse index is rebuilt on reading.
+  expect_index_agrees(*back, original);
 }
 
 TEST(SemiOcTree, ReadDataRejectsCorruptPayload) {

@@ -3,10 +3,15 @@
 // are the acceptance of the survey (skipped under sanitizers: too slow there).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <numeric>
 
@@ -177,6 +182,43 @@ TEST(Survey, ASecondRunReplacesTheFirstRunsScanFolders) {
   EXPECT_FALSE(fs::exists(scratch() / "rerun" / "scan_01"));
 }
 
+// The vertex count and bounding box of a binary little-endian PLY of float x, y, z.
+struct PlyBox {
+  std::size_t vertices = 0;
+  std::array<float, 3> lo{1e30f, 1e30f, 1e30f}, hi{-1e30f, -1e30f, -1e30f};
+  float extent(int axis) const { return hi[axis] - lo[axis]; }
+};
+
+PlyBox read_ply_box(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  PlyBox box;
+  const std::string end = "end_header\n";
+  const std::size_t body = data.find(end);
+  const std::string header = data.substr(0, body);
+  EXPECT_NE(body, std::string::npos) << path;
+  EXPECT_NE(header.find("format binary_little_endian 1.0"), std::string::npos) << header;
+  EXPECT_NE(header.find("property float x\nproperty float y\nproperty float z\n"),
+            std::string::npos)
+      << header;
+  const std::size_t at = header.find("element vertex ");
+  if (body == std::string::npos || at == std::string::npos) return box;
+  box.vertices = std::stoul(header.substr(at + 15));
+  const std::size_t start = body + end.size();
+  EXPECT_EQ(data.size() - start, box.vertices * 12) << path;
+  if (data.size() - start != box.vertices * 12) return box;
+  for (std::size_t i = 0; i < box.vertices; ++i) {
+    float p[3];
+    std::memcpy(p, data.data() + start + 12 * i, sizeof p);
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_TRUE(std::isfinite(p[a]));
+      box.lo[a] = std::min(box.lo[a], p[a]);
+      box.hi[a] = std::max(box.hi[a], p[a]);
+    }
+  }
+  return box;
+}
+
 TEST(Survey, WritesEveryOutputWithTheDocumentedSchema) {
   const json j = survey("box", "--scene " + kScenes + "box-room.scene.json --max-scans 2");
   ASSERT_FALSE(j.is_null());
@@ -204,12 +246,30 @@ TEST(Survey, WritesEveryOutputWithTheDocumentedSchema) {
     EXPECT_EQ(s["stop_percent"].is_null(), s["nbv"].is_null());
     EXPECT_GT(s["octants"]["total"].get<double>(), 1000);
     EXPECT_GT(s["octants"]["by_label"]["occupied"].get<double>(), 100);
+    // The counts add up both ways, and the volume shares to 100 %.
+    std::size_t by_label = 0, by_level = 0;
+    for (const json& n : s["octants"]["by_label"]) by_label += n.get<std::size_t>();
+    for (const json& n : s["octants"]["by_level"]) by_level += n.get<std::size_t>();
+    EXPECT_EQ(by_label, s["octants"]["total"].get<std::size_t>());
+    EXPECT_EQ(by_level, s["octants"]["total"].get<std::size_t>());
+    double shares = 0;
+    for (const json& v : s["volume_percent"]) shares += v.get<double>();
+    EXPECT_NEAR(shares, 100.0, 1e-6);
     EXPECT_GT(s["points_raw"].get<double>(), s["points_kept"].get<double>());
     char dir[16];
     std::snprintf(dir, sizeof dir, "scan_%02d", s["index"].get<int>());
     for (const char* f :
          {"semioctree.ot", "labels_color.ot", "occupancy.bt", "slice.png", "cloud.ply"})
       EXPECT_GT(fs::file_size(scratch() / "box" / dir / f), 100u) << dir << "/" << f;
+    // cloud.ply: binary float x, y, z, as many as its header says, spanning the room
+    // (interior 6 × 4 × 2.8 m; the floor and ceiling cut keeps the points beyond 2σ).
+    const PlyBox cloud = read_ply_box(scratch() / "box" / dir / "cloud.ply");
+    EXPECT_GT(cloud.vertices, 10000u);
+    EXPECT_LE(cloud.vertices,
+              s["points_kept"].get<std::size_t>() * (s["index"].get<std::size_t>() + 1));
+    EXPECT_NEAR(cloud.extent(0), 6.0, 0.1) << dir;
+    EXPECT_NEAR(cloud.extent(1), 4.0, 0.1) << dir;
+    EXPECT_NEAR(cloud.extent(2), 2.8, 0.05) << dir;
     // The estimated pose matches the true one (the first scan defines the frame).
     EXPECT_NEAR(s["pose"]["x"].get<double>(), s["true_pose"]["x"].get<double>(), 0.02);
     EXPECT_NEAR(s["pose"]["y"].get<double>(), s["true_pose"]["y"].get<double>(), 0.02);
@@ -303,6 +363,30 @@ TEST_P(LabSurvey, StopsWithinFiveScansAndCoversTheRoom) {
   EXPECT_LE(j["scans"].size(), 5u);
   EXPECT_LE(j["scans"].back()["stop_percent"].get<double>(), 0.1);
   EXPECT_GE(j["coverage"]["percent"].get<double>(), 90.0);
+  // The lab's window (2.4 × 1.5 m) and three doors (1.0, 0.9, 0.9 × 2.1 m), each found
+  // once; the openings stage measures them in whole leaves of the 5 cm grid, so each edge
+  // may lose up to a leaf.
+  const double kTol = 2 * 0.05 + 0.005;
+  std::vector<double> door_widths;
+  int windows = 0;
+  for (const json& op : j["openings"]) {
+    ASSERT_EQ(op["corners"].size(), 4u);
+    if (op["kind"] == "window") {
+      ++windows;
+      EXPECT_NEAR(op["width"].get<double>(), 2.4, kTol);
+      EXPECT_NEAR(op["height"].get<double>(), 1.5, kTol);
+    } else {
+      EXPECT_EQ(op["kind"], "door");
+      door_widths.push_back(op["width"].get<double>());
+      EXPECT_NEAR(op["height"].get<double>(), 2.1, kTol);
+    }
+  }
+  EXPECT_EQ(windows, 1);
+  ASSERT_EQ(door_widths.size(), 3u);
+  std::sort(door_widths.begin(), door_widths.end());
+  EXPECT_NEAR(door_widths[0], 0.9, kTol);
+  EXPECT_NEAR(door_widths[1], 0.9, kTol);
+  EXPECT_NEAR(door_widths[2], 1.0, kTol);
   for (const json& s : j["scans"]) {
     EXPECT_LE(s["pose_error"]["m"].get<double>(), 0.02) << "scan " << s["index"];
     EXPECT_LE(s["pose_error"]["deg"].get<double>(), 0.3) << "scan " << s["index"];
