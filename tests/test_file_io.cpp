@@ -5,7 +5,9 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
+#include <tuple>
 
 #include "semioctree/octomap_ext/export.h"
 #include "semioctree/octomap_ext/file_io.h"
@@ -62,11 +64,39 @@ TEST(FileIo, ReadsEachTypeBack) {
   auto semi = read_tree_file(f.semi.string());
   EXPECT_EQ(semi.type, "SemiOcTree");
   EXPECT_FALSE(semi.binary);
-  ASSERT_NE(dynamic_cast<SemiOcTree*>(semi.tree.get()), nullptr);
+  const auto* semi_tree = dynamic_cast<SemiOcTree*>(semi.tree.get());
+  ASSERT_NE(semi_tree, nullptr);
   EXPECT_EQ(semi.tree->size(), t.size());
+  // The same octants (min-corner key, level) with the same labels.
+  using OctantId = std::tuple<unsigned, unsigned, unsigned, unsigned>;
+  auto labels_of = [](const SemiOcTree& tree) {
+    std::map<OctantId, Label> m;
+    tree.for_each_octant([&](const Octant& o) {
+      m[{o.key.k[0], o.key.k[1], o.key.k[2], o.level}] = o.label();
+    });
+    return m;
+  };
+  const auto want_labels = labels_of(t);
+  EXPECT_GT(want_labels.size(), 100u);
+  EXPECT_EQ(labels_of(*semi_tree), want_labels);
+
   auto color = read_tree_file(f.color.string());
   EXPECT_EQ(color.type, "ColorOcTree");
-  EXPECT_NE(dynamic_cast<octomap::ColorOcTree*>(color.tree.get()), nullptr);
+  const auto* color_tree = dynamic_cast<octomap::ColorOcTree*>(color.tree.get());
+  ASSERT_NE(color_tree, nullptr);
+  // Leaf by leaf (key, depth), the colours of the tree that was written.
+  auto colours_of = [](const octomap::ColorOcTree& tree) {
+    std::map<std::tuple<unsigned, unsigned, unsigned, unsigned>, std::tuple<int, int, int>> m;
+    for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+      const octomap::OcTreeKey k = it.getKey();
+      const auto c = it->getColor();
+      m[{k.k[0], k.k[1], k.k[2], it.getDepth()}] = {c.r, c.g, c.b};
+    }
+    return m;
+  };
+  const auto want_colours = colours_of(*to_color_octree(t));
+  EXPECT_GT(want_colours.size(), 100u);
+  EXPECT_EQ(colours_of(*color_tree), want_colours);
   auto bt = read_tree_file(f.bt.string());
   EXPECT_TRUE(bt.binary);
   EXPECT_NE(dynamic_cast<octomap::OcTree*>(bt.tree.get()), nullptr);

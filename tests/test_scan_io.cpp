@@ -132,10 +132,36 @@ TEST(ScanIo, PosesAndErrors) {
   EXPECT_THROW(read_scans((dir / "junk.pcd").string()), ScanReadError);
 }
 
+// Point by point against PCL's own loader: the valid points in file order,
+// the NaN/Inf ones dropped and counted.
 TEST(ScanIo, ReadsTheRealScan) {
-  const auto scans = read_scans(std::string(SEMIOCTREE_SHARED_DIR) + "/data/real/room_scan1.pcd");
+  const std::string path = std::string(SEMIOCTREE_SHARED_DIR) + "/data/real/room_scan1.pcd";
+  const auto scans = read_scans(path);
   ASSERT_EQ(scans.size(), 1u);
   EXPECT_EQ(scans[0].points->size() + scans[0].invalid_dropped, 112586u);
+  Cloud pcl_cloud;
+  ASSERT_EQ(pcl::io::loadPCDFile(path, pcl_cloud), 0);
+  ASSERT_EQ(pcl_cloud.size(), 112586u);
+  const Cloud& ours = *scans[0].points;
+  std::size_t next = 0, invalid = 0;
+  for (std::size_t i = 0; i < pcl_cloud.size(); ++i) {
+    const pcl::PointXYZ& p = pcl_cloud[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+      ++invalid;
+      continue;
+    }
+    ASSERT_LT(next, ours.size()) << "file point " << i;
+    EXPECT_EQ(ours[next].x, p.x) << "file point " << i;
+    EXPECT_EQ(ours[next].y, p.y) << "file point " << i;
+    EXPECT_EQ(ours[next].z, p.z) << "file point " << i;
+    ++next;
+  }
+  EXPECT_EQ(next, ours.size());
+  EXPECT_EQ(invalid, scans[0].invalid_dropped);
+  // VIEWPOINT 0 0 0 1 0 0 0: the identity, so no pose from the file.
+  EXPECT_EQ(scans[0].pose_from_file,
+            !(pcl_cloud.sensor_origin_.head<3>().isZero() &&
+              pcl_cloud.sensor_orientation_.isApprox(Eigen::Quaternionf::Identity())));
 }
 
 }  // namespace

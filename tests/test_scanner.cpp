@@ -8,13 +8,18 @@
 #include <Eigen/Geometry>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "semioctree/sim/geometry.h"
 #include "semioctree/sim/point_io.h"
@@ -121,6 +126,13 @@ TEST(Scanner, WithoutNoiseRangesAreExact) {
   c.range_noise_sigma = 0;
   c.azimuth_step_deg = c.elevation_step_deg = 1.0;
   const Scan s = scan(*box.caster, c, {2.0, 1.5, 0.0});
+  // A closed room returns every ray: one point per cell of the 1° grid from
+  // the elevation range and the full turn, so none is skipped below.
+  const std::uint64_t rows =
+      std::llround((c.elevation_max_deg - c.elevation_min_deg) / c.elevation_step_deg) + 1;
+  const std::uint64_t cols = std::llround(360.0 / c.azimuth_step_deg);
+  EXPECT_EQ(s.rays_cast, rows * cols);
+  ASSERT_EQ(s.points.size(), rows * cols);
   const SolidModel solids(box.scene);
   const Eigen::Vector3d origin(2.0, 1.5, c.height);
   for (std::size_t i = 0; i < s.points.size(); ++i) {
@@ -137,11 +149,15 @@ TEST(Scanner, YawTurnsTheScannerFrame) {
   c.range_noise_sigma = 0;
   c.azimuth_step_deg = c.elevation_step_deg = 1.0;
   const Scan s = scan(*box.caster, c, {2.0, 1.5, 90.0});
+  ASSERT_DOUBLE_EQ(s.grid.elevation_deg(60), 0.0);
+  bool found = false;
   for (std::size_t i = 0; i < s.points.size(); ++i)
     if (s.row[i] == 60 && s.col[i] == 0) {
+      found = true;
       EXPECT_NEAR(s.points[i].x(), 2.5, 1e-5);  // forward is world +y: the wall y = 4
       EXPECT_NEAR(world_point(s, i).y(), 4.0, 1e-5);
     }
+  ASSERT_TRUE(found) << "no return straight ahead";
 }
 
 TEST(Scanner, MinAndMaxRangeAreRespected) {
@@ -271,11 +287,77 @@ TEST(PointFiles, PcdHeaderCarriesFieldsAndPose) {
   EXPECT_THROW(write_scan("x.xyz", s), std::runtime_error);
 }
 
-TEST(PointFiles, PlyIsBinaryWithTheSameFields) {
+// A binary little-endian PLY read without PCL: each element's records, every
+// scalar property as a double (exact for float and 32-bit integers).
+struct PlyElement {
+  std::string name;
+  std::size_t count = 0;
+  std::vector<std::pair<std::string, std::string>> properties;  // type, name
+  std::vector<std::vector<double>> records;
+  std::size_t index(const std::string& property) const {
+    for (std::size_t i = 0; i < properties.size(); ++i)
+      if (properties[i].second == property) return i;
+    ADD_FAILURE() << name << " has no property " << property;
+    return 0;
+  }
+};
+
+std::vector<PlyElement> read_binary_ply(const std::string& bytes) {
+  std::vector<PlyElement> elements;
+  const std::size_t end = bytes.find("end_header\n");
+  if (end == std::string::npos) throw std::runtime_error("no end_header");
+  std::istringstream header(bytes.substr(0, end));
+  for (std::string line; std::getline(header, line);) {
+    std::istringstream words(line);
+    std::string word;
+    words >> word;
+    if (word == "element") {
+      elements.emplace_back();
+      words >> elements.back().name >> elements.back().count;
+    } else if (word == "property") {
+      std::string type, name;
+      words >> type >> name;
+      if (type == "list" && elements.back().count > 0)
+        throw std::runtime_error("list property " + line);
+      elements.back().properties.emplace_back(type, name);
+    }
+  }
+  std::size_t at = end + std::strlen("end_header\n");
+  auto take = [&](auto value) {
+    if (at + sizeof(value) > bytes.size()) throw std::runtime_error("truncated data");
+    std::memcpy(&value, bytes.data() + at, sizeof(value));
+    at += sizeof(value);
+    return double(value);
+  };
+  for (PlyElement& e : elements)
+    for (std::size_t r = 0; r < e.count; ++r) {
+      std::vector<double>& record = e.records.emplace_back();
+      for (const auto& [type, name] : e.properties) {
+        if (type == "float")
+          record.push_back(take(float()));
+        else if (type == "uint")
+          record.push_back(take(std::uint32_t()));
+        else if (type == "int")
+          record.push_back(take(std::int32_t()));
+        else if (type == "uchar")
+          record.push_back(take(std::uint8_t()));
+        else
+          throw std::runtime_error("unexpected property type " + type);
+      }
+    }
+  if (at != bytes.size()) throw std::runtime_error("bytes after the last element");
+  return elements;
+}
+
+// The PLY holds every point with all its fields, and the pose in PCL's camera
+// element. The pipeline's reader (semioctree::read_scans) is not linked into
+// this test (semioctree_sim does not depend on the pipeline), and PCL 1.13 would
+// not give it the camera back (PCL #5761): the file is read here without PCL.
+TEST(PointFiles, PlyIsBinaryWithEveryPointAndThePose) {
   const Loaded box("box-room");
   ScannerConfig c = box.scene.scanner;
   c.azimuth_step_deg = c.elevation_step_deg = 2.0;
-  const Scan s = scan(*box.caster, c, {2.0, 1.5, 0.0});
+  const Scan s = scan(*box.caster, c, {2.0, 1.5, 30.0});
   const fs::path file = scratch() / "semioctree_test_header.ply";
   write_ply(file.string(), s);
   const std::string text = slurp(file.string());
@@ -285,6 +367,43 @@ TEST(PointFiles, PlyIsBinaryWithTheSameFields) {
   for (const char* p : {"property float x\n", "property float intensity\n", "property uint row\n",
                         "property uint col\n"})
     EXPECT_NE(text.find(p), std::string::npos) << p;
+
+  const std::vector<PlyElement> elements = read_binary_ply(text);
+  const PlyElement* vertex = nullptr;
+  const PlyElement* camera = nullptr;
+  for (const PlyElement& e : elements) {
+    if (e.name == "vertex") vertex = &e;
+    if (e.name == "camera") camera = &e;
+  }
+  ASSERT_NE(vertex, nullptr);
+  ASSERT_GT(s.points.size(), 1000u);
+  ASSERT_EQ(vertex->records.size(), s.points.size());
+  const std::size_t x = vertex->index("x"), y = vertex->index("y"), z = vertex->index("z"),
+                    in = vertex->index("intensity"), row = vertex->index("row"),
+                    col = vertex->index("col");
+  for (std::size_t i = 0; i < s.points.size(); ++i) {
+    const std::vector<double>& v = vertex->records[i];
+    ASSERT_EQ(v[x], s.points[i].x()) << "point " << i;
+    ASSERT_EQ(v[y], s.points[i].y()) << "point " << i;
+    ASSERT_EQ(v[z], s.points[i].z()) << "point " << i;
+    ASSERT_EQ(v[in], s.intensity[i]) << "point " << i;
+    ASSERT_EQ(v[row], s.row[i]) << "point " << i;
+    ASSERT_EQ(v[col], s.col[i]) << "point " << i;
+  }
+  // The camera: the optical centre, and the rows of the scanner-to-world rotation.
+  ASSERT_NE(camera, nullptr);
+  ASSERT_EQ(camera->records.size(), 1u);
+  const std::vector<double>& cam = camera->records[0];
+  const Eigen::Vector3d origin(2.0, 1.5, c.height);
+  const double yaw = 30.0 * M_PI / 180.0;
+  const Eigen::Matrix3d rot = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const char* axis = "xyz";
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(cam[camera->index(std::string("view_p") + axis[i])], origin[i], 1e-6);
+    for (int j = 0; j < 3; ++j)
+      EXPECT_NEAR(cam[camera->index(std::string(1, axis[i]) + "_axis" + axis[j])], rot(i, j), 1e-6)
+          << "row " << i << " column " << j;
+  }
   fs::remove(file);
 }
 

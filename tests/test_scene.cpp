@@ -5,15 +5,23 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "semioctree/sim/geometry.h"
 #include "semioctree/sim/scene.h"
@@ -383,11 +391,11 @@ TEST(SceneFormat, DefaultsOfTheFormat) {
 TEST(SceneFormat, EveryKeyIsRead) {
   const Scene s = parse_scene_json(R"({
     "format": "semioctree-scene", "version": 1, "name": "all", "description": "every key",
-    "walls": [{"from": [0, 0], "to": [5, 0], "thickness": 0.3, "z0": -0.1, "z1": 2.7,
+    "walls": [{"from": [-0.5, 0], "to": [5, 0], "thickness": 0.3, "z0": -0.1, "z1": 2.7,
                "openings": [{"kind": "window", "start": 1, "width": 1.2, "sill": 1.1, "height": 0.8}]}],
     "slabs": [{"polygon": [[0, 0], [5, 0], [5, 5]], "z0": 2.7, "z1": 2.9}],
     "boxes": [{"center": [2, 2, 0.4], "size": [1, 0.5, 0.8], "yaw_deg": 30, "name": "crate"}],
-    "cylinders": [{"center": [3, 3], "radius": 0.2, "z0": 0, "z1": 1, "name": "bin"}],
+    "cylinders": [{"center": [3, 3], "radius": 0.2, "z0": 0.1, "z1": 1, "name": "bin"}],
     "meshes": [{"file": "meshes/waste_bin.ply", "position": [4, 1, 0], "yaw_deg": 45, "scale": 2}],
     "robot": {"start": [1, 2], "start_yaw_deg": 90, "radius": 0.3, "odometry_noise": [0.01, 0.2]},
     "scanner": {"height": 1.2, "azimuth_step_deg": 0.5, "elevation_step_deg": 0.4, "elevation_min_deg": -45,
@@ -395,19 +403,47 @@ TEST(SceneFormat, EveryKeyIsRead) {
     "survey_area": [[0.5, 0.5], [4.5, 0.5], [4.5, 4.5], [0.5, 4.5]]
   })",
                                    "all.scene.json", kScenes);
+  // Values differ from the defaults (wall from, cylinder z0), so a key that is
+  // not read shows.
+  EXPECT_EQ(s.name, "all");
   EXPECT_EQ(s.description, "every key");
+  ASSERT_EQ(s.walls.size(), 1u);
+  EXPECT_EQ(s.walls[0].from, Eigen::Vector2d(-0.5, 0));
+  EXPECT_EQ(s.walls[0].to, Eigen::Vector2d(5, 0));
   EXPECT_DOUBLE_EQ(s.walls[0].thickness, 0.3);
   EXPECT_DOUBLE_EQ(s.walls[0].z0, -0.1);
+  EXPECT_DOUBLE_EQ(s.walls[0].z1, 2.7);
+  ASSERT_EQ(s.walls[0].openings.size(), 1u);
   EXPECT_EQ(s.walls[0].openings[0].kind, OpeningKind::window);
+  EXPECT_DOUBLE_EQ(s.walls[0].openings[0].start, 1);
+  EXPECT_DOUBLE_EQ(s.walls[0].openings[0].width, 1.2);
   EXPECT_DOUBLE_EQ(s.walls[0].openings[0].sill, 1.1);
+  EXPECT_DOUBLE_EQ(s.walls[0].openings[0].height, 0.8);
+  ASSERT_EQ(s.slabs.size(), 1u);
+  ASSERT_EQ(s.slabs[0].polygon.size(), 3u);
+  EXPECT_EQ(s.slabs[0].polygon[0], Eigen::Vector2d(0, 0));
+  EXPECT_EQ(s.slabs[0].polygon[1], Eigen::Vector2d(5, 0));
+  EXPECT_EQ(s.slabs[0].polygon[2], Eigen::Vector2d(5, 5));
+  EXPECT_DOUBLE_EQ(s.slabs[0].z0, 2.7);
   EXPECT_DOUBLE_EQ(s.slabs[0].z1, 2.9);
+  ASSERT_EQ(s.boxes.size(), 1u);
+  EXPECT_EQ(s.boxes[0].center, Eigen::Vector3d(2, 2, 0.4));
+  EXPECT_EQ(s.boxes[0].size, Eigen::Vector3d(1, 0.5, 0.8));
   EXPECT_EQ(s.boxes[0].name, "crate");
   EXPECT_DOUBLE_EQ(s.boxes[0].yaw_deg, 30);
+  ASSERT_EQ(s.cylinders.size(), 1u);
+  EXPECT_EQ(s.cylinders[0].center, Eigen::Vector2d(3, 3));
+  EXPECT_DOUBLE_EQ(s.cylinders[0].radius, 0.2);
+  EXPECT_DOUBLE_EQ(s.cylinders[0].z0, 0.1);
+  EXPECT_DOUBLE_EQ(s.cylinders[0].z1, 1);
   EXPECT_EQ(s.cylinders[0].name, "bin");
+  ASSERT_EQ(s.meshes.size(), 1u);
+  EXPECT_EQ(s.meshes[0].file, "meshes/waste_bin.ply");
   EXPECT_DOUBLE_EQ(s.meshes[0].scale, 2);
   EXPECT_DOUBLE_EQ(s.meshes[0].yaw_deg, 45);
   EXPECT_EQ(s.meshes[0].position, Eigen::Vector3d(4, 1, 0));
   EXPECT_EQ(s.meshes[0].mesh.triangles.size(), 28u);
+  EXPECT_EQ(s.robot.start, Eigen::Vector2d(1, 2));
   EXPECT_DOUBLE_EQ(s.robot.start_yaw_deg, 90);
   EXPECT_DOUBLE_EQ(s.robot.radius, 0.3);
   EXPECT_DOUBLE_EQ(s.robot.odometry_sigma_xy, 0.01);
@@ -421,7 +457,11 @@ TEST(SceneFormat, EveryKeyIsRead) {
   EXPECT_DOUBLE_EQ(s.scanner.max_range, 30);
   EXPECT_DOUBLE_EQ(s.scanner.range_noise_sigma, 0.001);
   ASSERT_TRUE(s.survey_area.has_value());
-  EXPECT_EQ(s.survey_area->size(), 4u);
+  ASSERT_EQ(s.survey_area->size(), 4u);
+  EXPECT_EQ((*s.survey_area)[0], Eigen::Vector2d(0.5, 0.5));
+  EXPECT_EQ((*s.survey_area)[1], Eigen::Vector2d(4.5, 0.5));
+  EXPECT_EQ((*s.survey_area)[2], Eigen::Vector2d(4.5, 4.5));
+  EXPECT_EQ((*s.survey_area)[3], Eigen::Vector2d(0.5, 4.5));
 }
 
 TEST(SceneFiles, ShippedScenesLoad) {
@@ -634,6 +674,49 @@ TEST(SceneInfoCommand, InvalidScenesExitNonZeroWithTheMessage) {
   fs::remove_all(dir);
 }
 
+// The points of a binary PCD as `semioctree scan` writes it (x y z first, 4-byte
+// floats), read without PCL, and its VIEWPOINT line.
+struct PcdPoints {
+  std::vector<Eigen::Vector3d> points;
+  std::string viewpoint;
+};
+
+PcdPoints read_binary_pcd(const std::string& bytes) {
+  PcdPoints out;
+  std::istringstream in(bytes);
+  std::size_t record = 0, count = 0;
+  std::vector<std::string> fields;
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream words(line);
+    std::string key;
+    words >> key;
+    if (key == "FIELDS") {
+      for (std::string f; words >> f;) fields.push_back(f);
+    } else if (key == "SIZE") {
+      for (std::size_t n; words >> n;) record += n;
+    } else if (key == "POINTS") {
+      words >> count;
+    } else if (key == "VIEWPOINT") {
+      out.viewpoint = line.substr(std::strlen("VIEWPOINT "));
+    } else if (key == "DATA") {
+      if (line != "DATA binary") throw std::runtime_error("not binary: " + line);
+      break;
+    }
+  }
+  if (fields.size() < 3 || fields[0] != "x" || fields[1] != "y" || fields[2] != "z")
+    throw std::runtime_error("fields do not start with x y z");
+  const std::size_t start = static_cast<std::size_t>(in.tellg());
+  // PCL's writer may pad the file after the data.
+  if (bytes.size() < start + count * record)
+    throw std::runtime_error("data shorter than POINTS x the record size");
+  for (std::size_t i = 0; i < count; ++i) {
+    float xyz[3];
+    std::memcpy(xyz, bytes.data() + start + i * record, sizeof xyz);
+    out.points.emplace_back(xyz[0], xyz[1], xyz[2]);
+  }
+  return out;
+}
+
 TEST(SceneInfoCommand, MeshAndOctomapFilesAreScenesToo) {
   CliRun r = run_cli("scene-info " + kScenes + "/meshes/chair.obj --at 2,2");
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -641,21 +724,90 @@ TEST(SceneInfoCommand, MeshAndOctomapFilesAreScenesToo) {
   EXPECT_NE(r.out.find("start (2.00, 2.00)"), std::string::npos) << r.out;
 
   const fs::path bt = scratch() / "wall.bt";
+  // The wall's voxels (leaf keys) and its box [lo, hi], from the tree written.
+  std::set<std::array<int, 3>> voxels;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
   {
     octomap::OcTree tree(0.1);
     for (float y = -1.0f; y < 1.0f; y += 0.1f)
       for (float z = 0.05f; z < 2.0f; z += 0.1f)
         tree.updateNode(octomap::point3d(3.05f, y + 0.05f, z), true);
     ASSERT_TRUE(tree.writeBinary(bt.string()));
+    for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+      ASSERT_EQ(it.getDepth(), tree.getTreeDepth()) << "one voxel thick: nothing to prune";
+      const octomap::OcTreeKey k = it.getKey();
+      voxels.insert({int(k[0]), int(k[1]), int(k[2])});
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], tree.keyToCoord(k[a]) - 0.05);
+        hi[a] = std::max(hi[a], tree.keyToCoord(k[a]) + 0.05);
+      }
+    }
   }
+  ASSERT_GE(voxels.size(), 400u);
+  // Its closed surface: each voxel face without a voxel behind it, as 2 triangles.
+  std::size_t faces = 0;
+  for (const auto& v : voxels)
+    for (int a = 0; a < 3; ++a)
+      for (int step : {-1, 1}) {
+        auto n = v;
+        n[a] += step;
+        faces += voxels.count(n) == 0;
+      }
   r = run_cli("scene-info " + bt.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("triangles:   " + std::to_string(2 * faces) + "\n"), std::string::npos)
+      << r.out;
+  std::ostringstream extent;
+  extent << std::fixed << std::setprecision(2) << "extent:      (" << lo.x() << ", " << lo.y()
+         << ", " << lo.z() << ") to (" << hi.x() << ", " << hi.y() << ", " << hi.z() << ")";
+  EXPECT_NE(r.out.find(extent.str()), std::string::npos) << extent.str() << "\n" << r.out;
+
   const fs::path out = scratch() / "wall.pcd";
   r = run_cli("scan --scene " + bt.string() +
               " --at 0,0 --azimuth-step 1 --elevation-step 1 --out " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(fs::exists(out));
-  EXPECT_EQ(r.out.find("wrote " + out.string() + ": 0 points"), std::string::npos) << r.out;
+  ASSERT_TRUE(fs::exists(out));
+  const PcdPoints pcd = read_binary_pcd(semioctree::testing::slurp(out.string()));
+  EXPECT_NE(
+      r.out.find("wrote " + out.string() + ": " + std::to_string(pcd.points.size()) + " points"),
+      std::string::npos)
+      << r.out;
+  // The scanner stands at (0, 0) facing +x at the default height; nothing but
+  // the wall's face x = lo.x, the one facing it, is in view (no floor).
+  const ScannerConfig config;
+  const Eigen::Vector3d origin(0, 0, config.height);
+  std::ostringstream viewpoint;
+  viewpoint << "0 0 " << config.height << " 1 0 0 0";  // position, then quaternion w x y z
+  EXPECT_EQ(pcd.viewpoint, viewpoint.str());
+  const double tol = 7 * config.range_noise_sigma + 1e-4;
+  for (const Eigen::Vector3d& p : pcd.points) {
+    const Eigen::Vector3d w = origin + p;
+    ASSERT_NEAR(w.x(), lo.x(), tol) << w.transpose();
+    ASSERT_GE(w.y(), lo.y() - tol) << w.transpose();
+    ASSERT_LE(w.y(), hi.y() + tol) << w.transpose();
+    ASSERT_GE(w.z(), lo.z() - tol) << w.transpose();
+    ASSERT_LE(w.z(), hi.z() + tol) << w.transpose();
+  }
+  // One point per ray of the 1° grid that meets the face: at least those that
+  // meet it 1 mm inside its edges, at most those that meet it within 1 mm outside.
+  std::size_t inside = 0, near = 0;
+  const double el_min = config.elevation_min_deg, el_max = config.elevation_max_deg;
+  for (double el = el_min; el <= el_max + 1e-9; el += 1.0)
+    for (int az = 0; az < 360; ++az) {
+      const double e = el * M_PI / 180, a = az * M_PI / 180;
+      const Eigen::Vector3d d(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e));
+      if (d.x() <= 1e-9) continue;
+      const Eigen::Vector3d hit = origin + d * ((lo.x() - origin.x()) / d.x());
+      auto within = [&](double m) {
+        return hit.y() >= lo.y() + m && hit.y() <= hi.y() - m && hit.z() >= lo.z() + m &&
+               hit.z() <= hi.z() - m;
+      };
+      inside += within(1e-3);
+      near += within(-1e-3);
+    }
+  EXPECT_GT(inside, 100u);
+  EXPECT_GE(pcd.points.size(), inside);
+  EXPECT_LE(pcd.points.size(), near);
 }
 
 TEST(SceneInfoCommand, HelpExplainsTheOptions) {
