@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
 
 #include "semioctree/preprocess.h"
 
@@ -49,6 +50,27 @@ std::vector<ScannerView> SurveyMap::views() const {
     out.push_back(v);
   }
   return out;
+}
+
+namespace {
+void require_a_scan(bool empty) {
+  if (empty) throw std::logic_error("SurveyMap: no scan added yet (call add_scan first)");
+}
+}  // namespace
+
+const SemiOcTree& SurveyMap::tree() const {
+  require_a_scan(empty());
+  return *tree_;
+}
+
+SemiOcTree& SurveyMap::tree() {
+  require_a_scan(empty());
+  return *tree_;
+}
+
+const Cloud& SurveyMap::merged_cloud() const {
+  require_a_scan(empty());
+  return *merged_;
 }
 
 ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,

@@ -52,6 +52,10 @@ TEST(Labels, NamesReadBackAsTheirLabel) {
   }
   for (const char* unknown : {"", "Occupied", "occupied ", "doors", "label", "9"})
     EXPECT_FALSE(label_from_name(unknown).has_value()) << '"' << unknown << '"';
+  // A value outside the enumeration (bad data cast to Label) is named, not read past.
+  EXPECT_EQ(label_name(Label(kLabelCount)), "invalid");
+  EXPECT_EQ(label_name(Label(255)), "invalid");
+  EXPECT_EQ(label_color(Label(255)).r, 0);
 }
 
 TEST(Export, ColorTreeHasEveryLabelledOctantInItsColour) {

@@ -88,6 +88,12 @@ TEST(SemiOcTree, ValidatesLeafAndCoarseSize) {
   EXPECT_THROW(SemiOcTree(-0.05, 0.8), std::invalid_argument);
   EXPECT_THROW(SemiOcTree(0.05, std::nan("")), std::invalid_argument);
   EXPECT_THROW(SemiOcTree(0.05, 0.025), std::invalid_argument);  // coarse below leaf
+  // Octant sizes from the coarse voxel (level 0) to the leaf (level k), none finer.
+  const SemiOcTree t(0.05, 0.8);
+  EXPECT_DOUBLE_EQ(t.octant_size(0), 0.8);
+  EXPECT_DOUBLE_EQ(t.octant_size(3), 0.1);
+  EXPECT_DOUBLE_EQ(t.octant_size(4), 0.05);
+  EXPECT_THROW(t.octant_size(5), std::out_of_range);
 }
 
 // Coarse voxel (i, j, l) is [iL, (i+1)L)³, whatever the point's sign.

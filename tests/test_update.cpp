@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <map>
+#include <stdexcept>
 
 #include "semioctree/update.h"
 
@@ -104,6 +105,10 @@ TEST(Update, SecondScanRefinesTheMapLikeARebuild) {
 
 TEST(Update, PointsAboveTheFirstCeilingAreLeftOut) {
   SurveyMap map(params());
+  // Before the first scan there is no map to look at.
+  EXPECT_TRUE(map.empty());
+  EXPECT_THROW(map.tree(), std::logic_error);
+  EXPECT_THROW(map.merged_cloud(), std::logic_error);
   map.add_scan(room_scan(false), Point3(1.0, 3.0, 1.2), 2.4);
   Cloud high = room_scan(false);
   add(high, 1.0, 1.0, 2.9);  // above the first scan's ceiling

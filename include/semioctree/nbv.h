@@ -103,10 +103,10 @@
 // reading): an octant seen directly counts whole, one behind n occluded
 // octants counts 1/(1+n) of its volume (it may or may not be seen), a blocked
 // one nothing. So the numerator is the volume the NBV is expected to reveal —
-// the NBV's method-1 score in m³. Counting every unblocked octant whole would
-// charge the survey with all the space behind each surface not scanned yet
-// (a wall seen nowhere hides the whole building behind it), which one more
-// scan reveals only a layer of.
+// the NBV's method-1 score (leaf cells) times the leaf cell's volume.
+// Counting every unblocked octant whole would charge the survey with all the
+// space behind each surface not scanned yet (a wall seen nowhere hides the
+// whole building behind it), which one more scan reveals only a layer of.
 #pragma once
 
 #include <cstddef>
@@ -148,6 +148,9 @@ struct NbvParams {
 
 struct NbvCandidate {
   Point3 position;  // scanner position: (x, y) of the candidate, z = scanner height
+  // Eq 3, in the method's unit: method 1 leaf cells of occluded volume (× leaf³ for
+  // m³), method 2 level-ℓ cells, method 3 m² of frontier faces. Compare scores of
+  // one method only.
   double score = 0;
 };
 
@@ -177,6 +180,9 @@ struct NbvResult {
   double stop_percent = 0;  // from the best candidate; 0 when there is none
   double seconds_candidates = 0, seconds_scoring = 0, seconds_stop = 0;  // wall time
 };
+
+// The functions below throw std::invalid_argument for a method other than 1, 2
+// or 3, or a method-2 level finer than the tree's leaf.
 
 // Feasible candidate positions (scanner positions, z = scanner height), in
 // grid order (y, then x). `robot_position`: the robot on the floor (its z is

@@ -57,6 +57,9 @@ class PreprocessError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Throws PreprocessError (with the reason) when the cloud has fewer than
+// params.min_points points, no plane within max_tilt_deg of horizontal, or no
+// floor and ceiling planes at least min_room_height apart.
 PreprocessResult preprocess(const Cloud& input, const PreprocessParams& params = {});
 
 // Decimates to a minimum spacing (PCL UniformSampling: one original point per

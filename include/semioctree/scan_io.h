@@ -45,7 +45,8 @@ class ScanReadError : public std::runtime_error {
 // By extension (case-insensitive): .pcd, .ply, .xyz/.txt/.asc, .ptx. PCD and
 // PLY give one scan posed by the file's viewpoint (points in the scanner's
 // frame, the viewpoint the scanner's pose: the identity when the file has
-// none); XYZ one scan with the identity pose; PTX one scan per header.
+// none); XYZ one scan with the identity pose; PTX one scan per header. Throws
+// ScanReadError for a file that cannot be read, is malformed or holds no point.
 std::vector<Scan> read_scans(const std::string& path);
 
 // "X,Y,Z,YAW_DEG" (YAW optional) → pose; throws std::invalid_argument.

@@ -54,14 +54,16 @@ class SurveyMap {
   explicit SurveyMap(const SurveyMapParams& params);
 
   // Adds one scan: `points` levelled (floor at z = 0) and registered into the
-  // survey frame, `scanner` its optical centre there. The first scan fixes the
-  // ceiling height; later points above it are left out.
+  // survey frame, `scanner` its optical centre there. The first scan's
+  // `ceiling_height` fixes the map's height; later calls' value is not used and
+  // their points above it are left out.
   ScanUpdateReport add_scan(const Cloud& points, const Point3& scanner, double ceiling_height);
 
   bool empty() const { return !tree_; }
-  const SemiOcTree& tree() const { return *tree_; }
-  SemiOcTree& tree() { return *tree_; }
-  const Cloud& merged_cloud() const { return *merged_; }
+  // The map and the merged cloud: std::logic_error before the first add_scan.
+  const SemiOcTree& tree() const;
+  SemiOcTree& tree();
+  const Cloud& merged_cloud() const;
   const std::vector<Point3>& scanners() const { return scanners_; }
   const std::vector<DetectedOpening>& openings() const { return openings_; }
   double ceiling_height() const { return ceiling_; }

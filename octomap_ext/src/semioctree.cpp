@@ -153,10 +153,30 @@ double OctantStatistics::total_volume() const {
 SemiOcTree::StaticMemberInitializer SemiOcTree::semioctree_member_init_;
 
 SemiOcTree::StaticMemberInitializer::StaticMemberInitializer() {
-  auto* tree = new SemiOcTree(0.1);
-  tree->clearKeyRays();
-  AbstractOcTree::registerTreeType(tree);
+  register_tree_types();
 }
+
+void register_tree_types() {
+  // Once, whoever comes first: this file's static initializer or a caller.
+  static const bool registered = [] {
+    auto* prototype = new SemiOcTree(0.1);
+    prototype->clearKeyRays();
+    SemiOcTree::registerTreeType(prototype);
+    return true;
+  }();
+  (void)registered;
+}
+
+}  // namespace semioctree
+
+// What semioctree::octomap_ext's link interface tells the linker to resolve
+// (--undefined): it lives in this object file, so the file and its static initializer
+// (the registration) are always linked, even from a static library.
+extern "C" void semioctree_register_tree_types() {
+  semioctree::register_tree_types();
+}
+
+namespace semioctree {
 
 unsigned SemiOcTree::coarse_level_for(double leaf_size, double coarse_size) {
   if (!(leaf_size > 0) || !std::isfinite(leaf_size))

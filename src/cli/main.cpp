@@ -2,14 +2,17 @@
 #include <exception>
 #include <iostream>
 #include <new>
+#include <string>
 
 #include "commands.h"
+#include "semioctree/version.h"
 
 int main(int argc, char** argv) {
-  CLI::App app{"semioctree " SEMIOCTREE_VERSION
+  const std::string name = std::string("semioctree ") + semioctree::version();
+  CLI::App app{name +
                " — Next-Best-View planning for indoor laser-scanning surveys on a semioctree\n"
                "(a world-aligned coarse voxel grid refined as OctoMap octrees where needed)."};
-  app.set_version_flag("--version", std::string("semioctree ") + SEMIOCTREE_VERSION);
+  app.set_version_flag("--version", name);
   app.require_subcommand(1);
   app.fallthrough(false);
   semioctree::cli::add_info_command(app);

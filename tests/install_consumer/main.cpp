@@ -1,5 +1,6 @@
 // Uses the installed library: builds a SemiOcTree, writes it, reads it back
-// through OctoMap's factory, and traverses a ray. Exit code 0 on success.
+// through OctoMap's factory, and traverses a ray; with an argument, also writes
+// the tree to that .ot file (for reader.cpp). Exit code 0 on success.
 #include <octomap/AbstractOcTree.h>
 #include <semioctree/octomap_ext/semioctree.h>
 #include <semioctree/version.h>
@@ -8,11 +9,12 @@
 #include <memory>
 #include <sstream>
 
-int main() {
+int main(int argc, char** argv) {
   semioctree::SemiOcTree tree(0.05, 0.8);
   tree.create_coarse({0, 0, 0}, semioctree::Label::kEmpty);
   std::stringstream buf;
   if (!tree.write(buf)) return 1;
+  if (argc > 1 && !tree.write(argv[1])) return 4;
   std::unique_ptr<octomap::AbstractOcTree> back(octomap::AbstractOcTree::read(buf));
   auto* semi = dynamic_cast<semioctree::SemiOcTree*>(back.get());
   if (!semi || semi->coarse_level() != 4) return 2;

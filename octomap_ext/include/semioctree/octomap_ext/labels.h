@@ -2,6 +2,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -43,11 +44,14 @@ inline constexpr std::array<Rgb, kLabelCount> kLabelColors = {{
     {230, 0, 0},      // nbv: red
 }};
 
+// A value outside the enumeration (a cast from bad data) is "invalid", drawn black.
 inline std::string_view label_name(Label l) {
-  return kLabelNames[static_cast<int>(l)];
+  const auto i = static_cast<std::size_t>(l);
+  return i < std::size_t(kLabelCount) ? kLabelNames[i] : std::string_view("invalid");
 }
 inline Rgb label_color(Label l) {
-  return kLabelColors[static_cast<int>(l)];
+  const auto i = static_cast<std::size_t>(l);
+  return i < std::size_t(kLabelCount) ? kLabelColors[i] : Rgb{0, 0, 0};
 }
 inline bool is_valid_label(std::uint8_t v) {
   return v < kLabelCount;

@@ -84,6 +84,8 @@ struct RayStep {
   Label label() const { return node ? node->label() : Label::kUnknown; }
 };
 
+void register_tree_types();  // below, with its documentation
+
 class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
  public:
   static constexpr unsigned kTreeDepth = 16;
@@ -110,7 +112,10 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
   double coarse_size() const { return resolution * double(1u << coarse_level_); }
   unsigned coarse_level() const { return coarse_level_; }
   unsigned coarse_depth() const { return kTreeDepth - coarse_level_; }
+  // Edge of an octant of `level` (0 = coarse voxel ... coarse_level() = leaf);
+  // std::out_of_range for a level finer than the leaf.
   double octant_size(unsigned level) const {
+    if (level > coarse_level_) throw std::out_of_range("octant level finer than the leaf");
     return resolution * double(1u << (coarse_level_ - level));
   }
 
@@ -201,6 +206,7 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
     void ensureLinking() {}
   };
   static StaticMemberInitializer semioctree_member_init_;
+  friend void register_tree_types();  // registers the prototype (OctoMap's call is protected)
 
  private:
   struct SegmentFrame;  // per-segment constants of traverse()
@@ -221,6 +227,13 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
   // Packed (key >> k) of each coarse voxel → its node.
   PackedKeyMap<SemiOcTreeNode*, 50> coarse_;  // packed coarse index → node
 };
+
+// Registers SemiOcTree with OctoMap's tree factory, so that AbstractOcTree::read and
+// createTree know the type. Linking the CMake target semioctree::octomap_ext does it
+// before main() even in a program that names no SemiOcTree symbol (the target makes the
+// linker keep the registration, which a static library would otherwise drop); call this
+// only when linking the library by other means. Idempotent.
+void register_tree_types();
 
 // Thrown for malformed tree data (bad magic, truncation, hash mismatch, ...).
 class FileFormatError : public std::runtime_error {
