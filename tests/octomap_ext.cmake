@@ -1,5 +1,6 @@
 # Tests and benchmark of the OctoMap extension (octomap_ext/).
-foreach(t test_semioctree test_traversal test_file_io test_export test_packed_key_map)
+foreach(t test_semioctree test_traversal test_file_io test_export test_packed_key_map
+          test_import)
   semioctree_add_test(${t} SOURCES ${t}.cpp LIBS octomap_ext)
   target_include_directories(${t} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
 endforeach()

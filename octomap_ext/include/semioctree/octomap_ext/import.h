@@ -1,0 +1,38 @@
+// An OctoMap occupancy map as a SemiOcTree: the way in for OctoMap users who map with
+// their own tools (an octomap::OcTree in memory, or a .bt/.ot file) and want the NBV
+// without our point-cloud pipeline. The SemiOcTree keeps the map's resolution as its
+// leaf and OctoMap's key space, so keys and coordinates carry over unchanged.
+#pragma once
+
+#include <octomap/OcTree.h>
+
+#include <cstddef>
+#include <memory>
+
+#include "semioctree/octomap_ext/semioctree.h"
+
+namespace semioctree {
+
+struct OccupancyImportReport {
+  std::size_t map_leaves = 0;       // leaf nodes of the OctoMap map (at any depth)
+  std::size_t occupied_leaves = 0;  // SemiOcTree leaves made occupied
+  std::size_t empty_octants = 0;    // octants made empty (at their own size)
+  std::size_t coarse_voxels = 0;    // coarse voxels created
+};
+
+// Every coarse voxel (edge `coarse_size`, the map's resolution times a power of two)
+// within the bounding box of the map's nodes is created, labelled `unobserved` (space
+// inside the map's extent that the map does not hold was not observed); then each leaf node
+// of the map labels its own space: occupied (OctoMap's isNodeOccupied) → occupied
+// leaves (a pruned occupied node is expanded: occupied octants are leaves), free →
+// one empty octant of the node's size (a coarse voxel or larger: each coarse voxel
+// it covers). Space the map does not hold keeps `unobserved`: kUnknown (the default)
+// for study_occlusion to classify from known scanner positions (OcclusionScope
+// kUnknown), or kOccluded to take all of it as hidden. Sibling octants left with one
+// label are merged. Throws std::invalid_argument if coarse_size is not the map's
+// resolution times a power of two (up to 2^kMaxCoarseLevel).
+std::unique_ptr<SemiOcTree> from_occupancy_octree(const octomap::OcTree& map, double coarse_size,
+                                                  Label unobserved = Label::kUnknown,
+                                                  OccupancyImportReport* report = nullptr);
+
+}  // namespace semioctree

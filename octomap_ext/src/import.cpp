@@ -1,0 +1,85 @@
+#include "semioctree/octomap_ext/import.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+namespace semioctree {
+
+std::unique_ptr<SemiOcTree> from_occupancy_octree(const octomap::OcTree& map, double coarse_size,
+                                                  Label unobserved, OccupancyImportReport* report) {
+  auto tree = std::make_unique<SemiOcTree>(map.getResolution(), coarse_size);
+  OccupancyImportReport rep;
+  const unsigned k = tree->coarse_level();
+  const unsigned coarse_depth = tree->coarse_depth();
+  const unsigned max_depth = SemiOcTree::kTreeDepth;
+  // OctoMap's iterator gives a node at depth d < 16 the key of its centre cell: its
+  // cells are [key − n/2, key + n/2) per axis, n = 2^(16 − d).
+  auto first_cell = [](const octomap::OcTreeKey& key, std::uint32_t n, int axis) {
+    return std::uint32_t(key[axis]) - n / 2;
+  };
+  auto cell_key = [](std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+    return octomap::OcTreeKey(octomap::key_type(x), octomap::key_type(y), octomap::key_type(z));
+  };
+  const std::uint32_t coarse_cells = 1u << k;
+  // The coarse voxels first, over the bounding box of the map's nodes (space inside it
+  // that the map does not hold is unobserved, not outside), so that a later label never
+  // meets a missing voxel.
+  struct Node {
+    octomap::OcTreeKey key;
+    unsigned depth;
+    bool occupied;
+  };
+  std::vector<Node> nodes;
+  std::uint32_t lo[3] = {~0u, ~0u, ~0u}, hi[3] = {0, 0, 0};  // cells, inclusive
+  for (auto it = map.begin_leafs(), end = map.end_leafs(); it != end; ++it) {
+    nodes.push_back({it.getKey(), it.getDepth(), map.isNodeOccupied(*it)});
+    const std::uint32_t n = 1u << (max_depth - it.getDepth());
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], first_cell(it.getKey(), n, a));
+      hi[a] = std::max(hi[a], first_cell(it.getKey(), n, a) + n - 1);
+    }
+  }
+  if (!nodes.empty()) {
+    const CoarseIndex c0 = tree->coarse_index(cell_key(lo[0], lo[1], lo[2]));
+    const CoarseIndex c1 = tree->coarse_index(cell_key(hi[0], hi[1], hi[2]));
+    for (auto x = c0.x; x <= c1.x; ++x)
+      for (auto y = c0.y; y <= c1.y; ++y)
+        for (auto z = c0.z; z <= c1.z; ++z) {
+          tree->create_coarse({x, y, z}, unobserved);
+          ++rep.coarse_voxels;
+        }
+  }
+  rep.map_leaves = nodes.size();
+
+  for (const Node& node : nodes) {
+    const std::uint32_t n = 1u << (max_depth - node.depth);
+    const std::uint32_t x0 = first_cell(node.key, n, 0), y0 = first_cell(node.key, n, 1),
+                        z0 = first_cell(node.key, n, 2);
+    if (node.occupied) {  // occupied octants are leaves: every cell of the node
+      for (std::uint32_t dx = 0; dx < n; ++dx)
+        for (std::uint32_t dy = 0; dy < n; ++dy)
+          for (std::uint32_t dz = 0; dz < n; ++dz) {
+            tree->set_label(cell_key(x0 + dx, y0 + dy, z0 + dz), k, Label::kOccupied);
+            ++rep.occupied_leaves;
+          }
+      continue;
+    }
+    if (node.depth >= coarse_depth) {  // within one coarse voxel: one octant
+      tree->set_label(node.key, node.depth - coarse_depth, Label::kEmpty);
+      ++rep.empty_octants;
+      continue;
+    }
+    for (std::uint32_t dx = 0; dx < n; dx += coarse_cells)  // each coarse voxel it covers
+      for (std::uint32_t dy = 0; dy < n; dy += coarse_cells)
+        for (std::uint32_t dz = 0; dz < n; dz += coarse_cells) {
+          tree->set_label(cell_key(x0 + dx, y0 + dy, z0 + dz), 0, Label::kEmpty);
+          ++rep.empty_octants;
+        }
+  }
+  tree->prune();
+  if (report) *report = rep;
+  return tree;
+}
+
+}  // namespace semioctree

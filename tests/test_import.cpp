@@ -1,0 +1,101 @@
+// An OctoMap occupancy map as a SemiOcTree (import.h): labels cell by cell against the
+// map, pruned free and occupied nodes, the coarse grid over the map's extent, bad sizes.
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+
+#include "semioctree/octomap_ext/export.h"
+#include "semioctree/octomap_ext/import.h"
+#include "support/sample_trees.h"
+
+namespace semioctree {
+namespace {
+
+// What the occupancy export keeps of a label, and what the import makes of it.
+Label through_occupancy(Label l, Label unobserved) {
+  switch (l) {
+    case Label::kOccupied:
+      return Label::kOccupied;
+    case Label::kOccluded:
+    case Label::kUnknown:
+      return unobserved;
+    default:
+      return Label::kEmpty;  // empty, door, window, out, scan, nbv: free in the .bt
+  }
+}
+
+TEST(Import, SampleTreeThroughItsOccupancyMapKeepsEveryCell) {
+  const auto original = testing::sample_tree();  // 3 × 2 × 2 coarse voxels of 0.4 m
+  const auto map = to_occupancy_octree(*original);
+  for (Label unobserved : {Label::kUnknown, Label::kOccluded}) {
+    OccupancyImportReport rep;
+    const auto tree = from_occupancy_octree(*map, 0.4, unobserved, &rep);
+    EXPECT_EQ(tree->leaf_size(), 0.05);
+    EXPECT_EQ(tree->coarse_level(), 3u);
+    EXPECT_EQ(tree->coarse_count(), 12u);
+    EXPECT_EQ(rep.coarse_voxels, 12u);
+    EXPECT_EQ(rep.map_leaves, map->getNumLeafNodes());
+    std::size_t cells = 0, occupied = 0;
+    for (double x = 0.025; x < 1.2; x += 0.05)
+      for (double y = 0.025; y < 0.8; y += 0.05)
+        for (double z = 0.025; z < 0.8; z += 0.05, ++cells) {
+          const auto was = original->find_octant(Point3(x, y, z));
+          const auto now = tree->find_octant(Point3(x, y, z));
+          ASSERT_TRUE(was && now) << x << " " << y << " " << z;
+          EXPECT_EQ(now->label(), through_occupancy(was->label(), unobserved))
+              << x << " " << y << " " << z << " was " << label_name(was->label());
+          occupied += now->label() == Label::kOccupied;
+        }
+    EXPECT_EQ(cells, 24u * 16u * 16u);
+    EXPECT_EQ(occupied, 256u);  // the sample tree's wall
+    EXPECT_EQ(rep.occupied_leaves, 256u);
+    EXPECT_EQ(tree->statistics().with_label(Label::kOccupied), 256u);
+  }
+}
+
+TEST(Import, PrunedNodesBecomeOctantsOfTheirSizeOrOccupiedLeaves) {
+  // A free 1.6 m cube and an occupied 0.4 m cube, both aligned with the 0.4 m grid:
+  // OctoMap prunes them into a few big nodes.
+  octomap::OcTree map(0.05);
+  for (double x = 0.025; x < 1.6; x += 0.05)
+    for (double y = 0.025; y < 1.6; y += 0.05)
+      for (double z = 0.025; z < 1.6; z += 0.05) map.updateNode(x, y, z, false);
+  for (double x = 2.025; x < 2.4; x += 0.05)
+    for (double y = 0.025; y < 0.4; y += 0.05)
+      for (double z = 0.025; z < 0.4; z += 0.05) map.updateNode(x, y, z, true);
+  map.prune();
+  ASSERT_LT(map.getNumLeafNodes(), 20u);  // pruned: 1 node for the free cube, 1 occupied
+  OccupancyImportReport rep;
+  const auto tree = from_occupancy_octree(map, 0.4, Label::kUnknown, &rep);
+  // The bounding box, 2.4 × 1.6 × 1.6 m, is 6 × 4 × 4 coarse voxels: 4³ of free space,
+  // each one empty octant; 1 of occupied space, 512 leaves; the other 31 unobserved.
+  EXPECT_EQ(tree->coarse_count(), 96u);
+  EXPECT_EQ(rep.coarse_voxels, 96u);
+  const OctantStatistics s = tree->statistics();
+  EXPECT_EQ(s.count[0][std::size_t(Label::kEmpty)], 64u);
+  EXPECT_EQ(s.with_label(Label::kEmpty), 64u);
+  EXPECT_EQ(s.with_label(Label::kOccupied), 512u);
+  EXPECT_EQ(s.count[0][std::size_t(Label::kUnknown)], 31u);
+  EXPECT_EQ(s.with_label(Label::kUnknown), 31u);
+  EXPECT_EQ(tree->find_octant(Point3(2.2, 1.0, 1.0))->label(), Label::kUnknown);
+  EXPECT_NEAR(s.volume[std::size_t(Label::kEmpty)], 1.6 * 1.6 * 1.6, 1e-9);
+  EXPECT_NEAR(s.volume[std::size_t(Label::kOccupied)], 0.4 * 0.4 * 0.4, 1e-9);
+  EXPECT_EQ(rep.occupied_leaves, 512u);
+  // A node of the map larger than a coarse voxel labels every voxel it covers.
+  EXPECT_EQ(tree->find_octant(Point3(1.5, 1.5, 1.5))->label(), Label::kEmpty);
+  EXPECT_EQ(tree->find_octant(Point3(1.5, 1.5, 1.5))->level, 0u);
+  EXPECT_EQ(tree->find_octant(Point3(2.3, 0.3, 0.3))->label(), Label::kOccupied);
+  EXPECT_FALSE(tree->find_octant(Point3(3.0, 3.0, 3.0)).has_value());  // beyond its extent
+}
+
+TEST(Import, CoarseSizeMustBeTheResolutionTimesAPowerOfTwo) {
+  octomap::OcTree map(0.05);
+  map.updateNode(0.1, 0.1, 0.1, true);
+  EXPECT_THROW(from_occupancy_octree(map, 0.7), std::invalid_argument);
+  EXPECT_THROW(from_occupancy_octree(map, 0.025), std::invalid_argument);
+  // An empty map gives an empty tree.
+  EXPECT_EQ(from_occupancy_octree(octomap::OcTree(0.05), 0.8)->coarse_count(), 0u);
+}
+
+}  // namespace
+}  // namespace semioctree
