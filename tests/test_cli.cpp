@@ -1,6 +1,7 @@
 // The `semioctree` command line: --help, --version, info and export, and clear
 // errors with a non-zero exit on bad input.
 #include <gtest/gtest.h>
+#include <octomap/OcTree.h>
 #include <pcl/io/pcd_io.h>
 #include <sys/wait.h>
 
@@ -184,6 +185,69 @@ TEST(Cli, MappingCommandsDropReturnsOutsideTheScannerLimits) {
         << grid << ": " << outside << "\n"
         << r.all();
   }
+}
+
+// map-nbv: the NBV for a map made with OctoMap's own insertPointCloud (a .bt), or for
+// one of our .ot files; clear errors for a map it cannot use.
+TEST(Cli, MapNbvTakesAnOctomapMapOrASemioctree) {
+  const auto dir = testing::temp_dir("cli-map-nbv");
+  // The 8 × 6 × 3 m room with a table, scanned from (3, 2.5, 1.5), floor at z = 0.
+  const Cloud::Ptr room = testing::synthetic_room(8, 6, 3, 0.05);
+  octomap::Pointcloud scan;
+  for (const auto& p : *room) scan.push_back(p.x + 3.0f, p.y + 2.5f, p.z + 1.5f);
+  octomap::OcTree map(0.05);
+  map.insertPointCloud(scan, octomap::point3d(3.0f, 2.5f, 1.5f));
+  const std::string bt = (dir / "room.bt").string();
+  ASSERT_TRUE(map.writeBinary(bt));
+
+  const CliRun r =
+      run_cli("map-nbv --map " + bt + " --scanner 3,2.5,1.5 --out " + (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.all();
+  std::ifstream in(dir / "out" / "nbv.json");
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["format"], "semioctree-map-nbv");
+  EXPECT_DOUBLE_EQ(j["leaf"].get<double>(), 0.05);
+  EXPECT_GT(j["candidates"].get<int>(), 10);
+  ASSERT_FALSE(j["nbv"].is_null()) << r.all();
+  // Under the table (x 5–6.6, y 1–1.8 above the floor) is hidden from the scanner.
+  EXPECT_GT(j["octants"]["by_label"]["occluded"].get<int>(), 0);
+  EXPECT_GT(j["stop_percent"].get<double>(), 0.0);
+  const double nx = j["nbv"]["x"], ny = j["nbv"]["y"];
+  EXPECT_TRUE(nx > 0.5 && nx < 7.5 && ny > 0.5 && ny < 5.5) << nx << ", " << ny;
+  EXPECT_DOUBLE_EQ(j["nbv"]["z"].get<double>(), 1.5);
+  const auto tree = read_semioctree_file((dir / "out" / "semioctree.ot").string());
+  EXPECT_DOUBLE_EQ(tree->leaf_size(), 0.05);
+  EXPECT_EQ(tree->find_octant(Point3(3.0, 5.975, 1.5))->label(), Label::kOccupied);  // a wall
+  for (const char* f : {"labels_color.ot", "occupancy.bt", "slice.png"})
+    EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
+
+  // Our own .ot is taken as it is: the same NBV.
+  const CliRun again = run_cli("map-nbv --map " + (dir / "out" / "semioctree.ot").string() +
+                               " --scanner 3,2.5,1.5 --out " + (dir / "again").string());
+  ASSERT_EQ(again.exit_code, 0) << again.all();
+  std::ifstream in2(dir / "again" / "nbv.json");
+  const auto k = nlohmann::json::parse(in2);
+  ASSERT_FALSE(k["nbv"].is_null());
+  EXPECT_DOUBLE_EQ(k["nbv"]["x"].get<double>(), nx);
+  EXPECT_DOUBLE_EQ(k["nbv"]["y"].get<double>(), ny);
+
+  // Errors name what is wrong.
+  const CliRun coarse = run_cli("map-nbv --map " + bt + " --scanner 3,2.5,1.5 --coarse 0.7 --out " +
+                                (dir / "x").string());
+  EXPECT_EQ(coarse.exit_code, 1);
+  EXPECT_NE(coarse.all().find("--coarse"), std::string::npos) << coarse.all();
+  const CliRun outside =
+      run_cli("map-nbv --map " + bt + " --scanner 30,2.5,1.5 --out " + (dir / "x").string());
+  EXPECT_EQ(outside.exit_code, 1);
+  EXPECT_NE(outside.all().find("outside the map"), std::string::npos) << outside.all();
+  const CliRun floor =
+      run_cli("map-nbv --map " + bt + " --scanner 3,2.5,0 --out " + (dir / "x").string());
+  EXPECT_EQ(floor.exit_code, 1);
+  EXPECT_NE(floor.all().find("--scanner-height"), std::string::npos) << floor.all();
+  const CliRun color = run_cli("map-nbv --map " + (dir / "out" / "labels_color.ot").string() +
+                               " --scanner 3,2.5,1.5 --out " + (dir / "x").string());
+  EXPECT_EQ(color.exit_code, 1);
+  EXPECT_NE(color.all().find("holds no occupancy"), std::string::npos) << color.all();
 }
 
 TEST(Cli, CompareWritesTablesAndChart) {

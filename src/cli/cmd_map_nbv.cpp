@@ -1,0 +1,245 @@
+// `semioctree map-nbv --map FILE --scanner X,Y,Z... --out DIR`: the next best view
+// for a map made elsewhere — an OctoMap occupancy map (.bt, or an OcTree .ot from
+// octomap_server or any OctoMap tool) or one of our SemiOcTree .ot files — without
+// our point-cloud pipeline (DESIGN.md "Drop-in for OctoMap users").
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "cloud_input.h"
+#include "commands.h"
+#include "option_checks.h"
+#include "semioctree/figures.h"
+#include "semioctree/nbv.h"
+#include "semioctree/occlusion.h"
+#include "semioctree/octomap_ext/file_io.h"
+#include "semioctree/octomap_ext/import.h"
+#include "semioctree/outputs.h"
+#include "semioctree/scan_io.h"
+
+namespace semioctree::cli {
+
+namespace {
+
+struct MapNbvOptions {
+  std::string map;
+  std::vector<std::string> scanners;
+  std::string out;
+  double coarse = 0.8;
+  std::string unobserved = "classify";
+  double stop = 0.1;
+  int method = 1;
+  double candidate_spacing = 0.5;
+  double robot_radius = 0.5;
+  double scanner_height = -1;  // < 0: the last scanner's z (the floor is z = 0)
+  unsigned threads = 0;
+  ScannerView limits;
+};
+
+double since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+nlohmann::json point_json(const Point3& p) {
+  return {{"x", p.x}, {"y", p.y}, {"z", p.z}};
+}
+
+void run_map_nbv(const MapNbvOptions& o) {
+  const auto t_start = std::chrono::steady_clock::now();
+  check_scanner_limits(o.limits);
+  std::vector<Point3> scanners;
+  for (const std::string& s : o.scanners) {
+    const Eigen::Vector3d p = parse_pose(s).position();
+    scanners.emplace_back(p.x(), p.y(), p.z());
+  }
+  const Point3 robot = scanners.back();
+  const double height = o.scanner_height > 0 ? o.scanner_height : robot.z;
+  if (!(height > 0))
+    throw std::invalid_argument(
+        "--scanner: the last scanner's z (" + std::to_string(robot.z) +
+        ") is its height above the floor, which the map must have at z = 0; give a positive "
+        "z or --scanner-height");
+
+  // The map: a SemiOcTree as it is, an OctoMap occupancy map imported.
+  TreeFile file = read_tree_file(o.map);
+  std::unique_ptr<SemiOcTree> tree;
+  if (auto* semi = dynamic_cast<SemiOcTree*>(file.tree.get())) {
+    file.tree.release();
+    tree.reset(semi);
+    std::printf("read %s: SemiOcTree, leaf %.3f m, coarse %.3f m, %zu octants\n", o.map.c_str(),
+                tree->leaf_size(), tree->coarse_size(), std::size_t(tree->statistics().total()));
+  } else if (auto* occupancy = dynamic_cast<octomap::OcTree*>(file.tree.get())) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const double res = occupancy->getResolution();
+    try {
+      SemiOcTree::coarse_level_for(res, o.coarse);
+    } catch (const std::invalid_argument&) {
+      throw std::invalid_argument("--coarse " + std::to_string(o.coarse) +
+                                  " is not the map's resolution (" + std::to_string(res) +
+                                  " m) times a power of two");
+    }
+    OccupancyImportReport rep;
+    const Label unobserved = o.unobserved == "occluded" ? Label::kOccluded : Label::kUnknown;
+    tree = from_occupancy_octree(*occupancy, o.coarse, unobserved, &rep);
+    std::printf(
+        "read %s: OctoMap %s, resolution %.3f m, %zu leaf nodes → SemiOcTree of %zu coarse "
+        "voxels (%zu occupied leaves) [%.2f s]\n",
+        o.map.c_str(), file.binary ? "occupancy map (.bt)" : file.type.c_str(), res, rep.map_leaves,
+        rep.coarse_voxels, rep.occupied_leaves, since(t0));
+    if (unobserved == Label::kUnknown) {
+      // Space the map does not hold: seen from a scanner (then empty: nothing returned
+      // there) or hidden (occluded), as the occlusion study decides.
+      const auto t1 = std::chrono::steady_clock::now();
+      std::vector<ScannerView> views;
+      for (const Point3& s : scanners) {
+        ScannerView v = o.limits;
+        v.position = s;
+        views.push_back(v);
+      }
+      OcclusionParams op;
+      op.scope = OcclusionScope::kUnknown;
+      op.threads = o.threads;
+      const OcclusionReport occ = study_occlusion(*tree, views, op);
+      std::printf(
+          "classified the unobserved space from %zu scanner position(s): %zu empty, %zu "
+          "occluded, %zu out [%.2f s]\n",
+          views.size(), occ.empty, occ.occluded, occ.out, since(t1));
+    }
+  } else {
+    throw std::invalid_argument(o.map + ": a " + file.type +
+                                " holds no occupancy (give a .bt, an OcTree .ot or a SemiOcTree "
+                                ".ot)");
+  }
+  if (!tree->find_octant(robot))
+    throw std::invalid_argument(
+        "--scanner: the robot's position (last --scanner) is outside "
+        "the map");
+
+  RobotGeometry geometry;
+  geometry.radius = o.robot_radius;
+  geometry.scanner_height = height;
+  NbvParams params;
+  params.method = o.method;
+  params.candidate_spacing = o.candidate_spacing;
+  params.threads = o.threads;
+  params.limits = o.limits;
+  const auto t2 = std::chrono::steady_clock::now();
+  const NbvResult r =
+      next_best_view(*tree, geometry, Point3(robot.x, robot.y, 0.0), scanners, params);
+  std::printf("nbv: %zu feasible candidates, %zu occluded targets [%.2f s]\n", r.candidates.size(),
+              r.scoring.targets, since(t2));
+
+  std::filesystem::create_directories(o.out);
+  SliceOptions slice;
+  slice.height = height;
+  slice.scans = scanners;
+  if (r.best) slice.nbv = r.best->position;
+  slice.title = std::filesystem::path(o.map).filename().string();
+  write_map_files(*tree, o.out, slice);
+
+  const OctantStatistics st = tree->statistics();
+  nlohmann::json by_label = nlohmann::json::object(), volume = nlohmann::json::object();
+  for (int l = 1; l < kLabelCount; ++l)
+    by_label[std::string(label_name(Label(l)))] = st.with_label(Label(l));
+  for (Label l : {Label::kEmpty, Label::kOccupied, Label::kOccluded, Label::kDoor, Label::kWindow,
+                  Label::kOut})
+    volume[std::string(label_name(l))] = volume_percent(st, l);
+  nlohmann::json scanner_list = nlohmann::json::array();
+  for (const Point3& s : scanners) scanner_list.push_back(point_json(s));
+  const bool complete = r.best && r.stop_percent < o.stop;
+  nlohmann::json j = {
+      {"format", "semioctree-map-nbv"},
+      {"version", 1},
+      {"map", o.map},
+      {"leaf", tree->leaf_size()},
+      {"coarse", tree->coarse_size()},
+      {"method", o.method},
+      {"scanners", scanner_list},
+      {"candidates", r.candidates.size()},
+      {"nbv", r.best ? nlohmann::json{{"x", r.best->position.x},
+                                      {"y", r.best->position.y},
+                                      {"z", r.best->position.z},
+                                      {"score", r.best->score}}
+                     : nlohmann::json(nullptr)},
+      {"stop_percent", r.best ? nlohmann::json(r.stop_percent) : nlohmann::json(nullptr)},
+      {"stop_threshold_percent", o.stop},
+      {"complete", complete},
+      {"octants", {{"total", st.total()}, {"by_label", by_label}}},
+      {"volume_percent", volume},
+      {"seconds_total", since(t_start)}};
+  const std::string json_path = (std::filesystem::path(o.out) / "nbv.json").string();
+  write_file_atomically(json_path, [&](std::ostream& os) { os << j.dump(2) << "\n"; });
+  if (r.best)
+    std::printf("next best view: (%.3f, %.3f, %.3f), score %.1f; stop percentage %.3f %% (%s)\n",
+                r.best->position.x, r.best->position.y, r.best->position.z, r.best->score,
+                r.stop_percent,
+                complete ? "below the threshold: the map is complete" : "above the threshold");
+  else
+    std::printf("no feasible next best view\n");
+  std::printf("wrote %s and the map files in %s\n", json_path.c_str(), o.out.c_str());
+}
+
+}  // namespace
+
+void add_map_nbv_command(CLI::App& app) {
+  auto o = std::make_shared<MapNbvOptions>();
+  auto* cmd = app.add_subcommand(
+      "map-nbv",
+      "Next best view for a map made elsewhere: an OctoMap occupancy map (.bt, or an OcTree .ot "
+      "from octomap_server or any OctoMap tool) or a SemiOcTree .ot. An OctoMap map becomes a "
+      "semioctree of the same resolution (its leaf); the space it does not hold is classified "
+      "from the scanner positions (seen → empty, hidden → occluded), or all taken as occluded "
+      "(--unobserved occluded). An occupancy map knows no doors or windows: what the scanners "
+      "saw through them counts as the room. The map's frame must be levelled with the floor at "
+      "z = 0. "
+      "Writes nbv.json (the NBV, its score and the stop percentage), semioctree.ot, "
+      "labels_color.ot, occupancy.bt and slice.png.");
+  cmd->add_option("--map", o->map, "the map: .bt, OcTree .ot or SemiOcTree .ot")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--scanner", o->scanners,
+                  "optical centre X,Y,Z of a scan that made the map, in its frame (repeat); the "
+                  "robot stands at the last")
+      ->required();
+  cmd->add_option("--out", o->out, "output directory")->required();
+  cmd->add_option("--coarse", o->coarse,
+                  "coarse voxel size L for an OctoMap map: its resolution times a power of two, "
+                  "m")
+      ->check(finite_positive())
+      ->capture_default_str();
+  cmd->add_option("--unobserved", o->unobserved,
+                  "space an OctoMap map does not hold: classify (from the --scanner positions) "
+                  "or occluded (all of it)")
+      ->check(CLI::IsMember({"classify", "occluded"}))
+      ->capture_default_str();
+  cmd->add_option("--stop", o->stop, "stop percentage threshold (Eq 5), %")
+      ->check(finite_in(0, 100))
+      ->capture_default_str();
+  cmd->add_option("--method", o->method,
+                  "NBV scoring: 1 = occluded volume, all levels (paper), 3 = area of the "
+                  "occlusion frontier facing the position (surface, ours)")
+      ->check(CLI::IsMember({1, 3}))
+      ->capture_default_str();
+  cmd->add_option("--candidate-spacing", o->candidate_spacing,
+                  "spacing of the NBV candidate grid at scanner height, m")
+      ->check(finite_positive(10))
+      ->capture_default_str();
+  cmd->add_option("--robot-radius", o->robot_radius, "safety cylinder radius, m (0.05 to 5)")
+      ->check(finite_in(0.05, 5))
+      ->capture_default_str();
+  cmd->add_option("--scanner-height", o->scanner_height,
+                  "scanner optical centre above the floor, m (default: the last --scanner's z)")
+      ->check(finite_positive(100));
+  cmd->add_option("--threads", o->threads, "worker threads (0: one per core; at most 256)")
+      ->check(thread_count())
+      ->capture_default_str();
+  add_scanner_limit_options(*cmd, o->limits);
+  cmd->callback([o] { run_map_nbv(*o); });
+}
+
+}  // namespace semioctree::cli
