@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <optional>
 #include <random>
 #include <set>
 #include <stdexcept>
@@ -274,6 +275,28 @@ std::vector<Point3> random_positions(unsigned seed, int count, const SemiOcTree*
   return out;
 }
 
+// The line a→b by the brute-force traversal: nullopt when blocked (an occupied, unknown,
+// door or window octant other than the scanner's own, or b outside the scanner's limits),
+// else the number of occluded octants crossed between the two ends.
+std::optional<int> reference_line(const SemiOcTree& t, const Point3& a, const Point3& b,
+                                  const ScannerView& lim) {
+  const double dx = b.x - a.x, dy = b.y - a.y, dz = b.z - a.z;
+  const double range = std::sqrt(dx * dx + dy * dy + dz * dz);
+  if (range < lim.min_range || range > lim.max_range || range == 0) return std::nullopt;
+  const double elevation = std::asin(dz / range) * 180 / M_PI;
+  if (elevation < lim.elevation_min_deg || elevation > lim.elevation_max_deg) return std::nullopt;
+  const auto steps = testing::reference_traversal(t, a, b);
+  int n = 0;
+  for (std::size_t j = 1; j < steps.size(); ++j) {
+    const auto oc = t.find_octant(steps[j].key);
+    const Label l = steps[j].has_node && oc ? oc->label() : Label::kUnknown;
+    if (l == Label::kOccupied || l == Label::kUnknown || l == Label::kDoor || l == Label::kWindow)
+      return std::nullopt;
+    if (l == Label::kOccluded && j + 1 < steps.size()) ++n;
+  }
+  return n;
+}
+
 // Eq 3 (method 1) with the brute-force traversal of tests/support: no cache,
 // no hierarchy; the scanner's own octant neither blocks nor counts, the
 // target's own octant does not count.
@@ -281,22 +304,8 @@ double reference_score(const SemiOcTree& t, const Point3& a, const ScannerView& 
   double sum = 0;
   t.for_each_octant([&](const Octant& o) {
     if (o.label() != Label::kOccluded) return;
-    const Point3& b = o.center;
-    const double dx = b.x - a.x, dy = b.y - a.y, dz = b.z - a.z;
-    const double range = std::sqrt(dx * dx + dy * dy + dz * dz);
-    if (range < lim.min_range || range > lim.max_range || range == 0) return;
-    const double elevation = std::asin(dz / range) * 180 / M_PI;
-    if (elevation < lim.elevation_min_deg || elevation > lim.elevation_max_deg) return;
-    const auto steps = testing::reference_traversal(t, a, b);
-    int n = 0;
-    for (std::size_t j = 1; j < steps.size(); ++j) {
-      const auto oc = t.find_octant(steps[j].key);
-      const Label l = steps[j].has_node && oc ? oc->label() : Label::kUnknown;
-      if (l == Label::kOccupied || l == Label::kUnknown || l == Label::kDoor || l == Label::kWindow)
-        return;
-      if (l == Label::kOccluded && j + 1 < steps.size()) ++n;
-    }
-    sum += double(std::uint64_t(1) << (3 * (t.coarse_level() - o.level))) / (1.0 + n);
+    if (const auto n = reference_line(t, a, o.center, lim))
+      sum += double(std::uint64_t(1) << (3 * (t.coarse_level() - o.level))) / (1.0 + *n);
   });
   return sum;
 }
@@ -321,20 +330,7 @@ double reference_score_method3(const SemiOcTree& t, const Point3& a, const Scann
                    nb->label() == Label::kNbv))
           ++faces;
       }
-    if (faces == 0) return;
-    const double dx = b.x - a.x, dy = b.y - a.y, dz = b.z - a.z;
-    const double range = std::sqrt(dx * dx + dy * dy + dz * dz);
-    if (range < lim.min_range || range > lim.max_range || range == 0) return;
-    const double elevation = std::asin(dz / range) * 180 / M_PI;
-    if (elevation < lim.elevation_min_deg || elevation > lim.elevation_max_deg) return;
-    const auto steps = testing::reference_traversal(t, a, b);
-    for (std::size_t j = 1; j < steps.size(); ++j) {
-      const auto oc = t.find_octant(steps[j].key);
-      const Label l = steps[j].has_node && oc ? oc->label() : Label::kUnknown;
-      if (l == Label::kOccupied || l == Label::kUnknown || l == Label::kDoor || l == Label::kWindow)
-        return;
-    }
-    sum += faces * o.size * o.size;
+    if (faces > 0 && reference_line(t, a, b, lim)) sum += faces * o.size * o.size;
   });
   return sum;
 }
@@ -707,23 +703,6 @@ TEST(Nbv, BestCandidateSeesThePocket) {
 // Drop-in for OctoMap users: a map built with OctoMap's own insertPointCloud,
 // imported, its unobserved space classified from the scanner position, gives the
 // shadow behind the pillar and an NBV that looks into it, as our own pipeline does.
-// Does the segment a→b pass through the box [lo, hi] (slab test)?
-bool segment_hits_box(const Point3& a, const Point3& b, const Point3& lo, const Point3& hi) {
-  double t0 = 0, t1 = 1;
-  for (int i = 0; i < 3; ++i) {
-    const double d = b[i] - a[i];
-    if (std::fabs(d) < 1e-12) {
-      if (a[i] < lo[i] || a[i] > hi[i]) return false;
-      continue;
-    }
-    double ta = (lo[i] - a[i]) / d, tb = (hi[i] - a[i]) / d;
-    if (ta > tb) std::swap(ta, tb);
-    t0 = std::max(t0, ta);
-    t1 = std::min(t1, tb);
-  }
-  return t0 <= t1;
-}
-
 TEST(Nbv, MapBuiltWithOctomapGivesTheNbvBehindThePillar) {
   const Point3 scanner(1.0, 2.0, 1.2);
   // What a scanner there records of room_with_pillar: the points it has a line of
@@ -735,7 +714,7 @@ TEST(Nbv, MapBuiltWithOctomapGivesTheNbvBehindThePillar) {
     const double f = (len - 0.02) / len;
     const Point3 end(scanner.x + f * (q.x - scanner.x), scanner.y + f * (q.y - scanner.y),
                      scanner.z + f * (q.z - scanner.z));
-    if (!segment_hits_box(scanner, end, {2.0, 1.7, 0.0}, {2.6, 2.3, 1.6})) cloud.push_back(p);
+    if (!testing::hits_pillar(scanner, end)) cloud.push_back(p);
   }
   octomap::OcTree map(0.05);
   octomap::Pointcloud scan;

@@ -15,25 +15,8 @@
 namespace semioctree {
 namespace {
 
+using testing::hits_pillar;
 using testing::room_with_pillar;
-
-// Does the segment a→b pass through the pillar's box (slab test)?
-bool hits_pillar(const Point3& a, const Point3& b) {
-  const double lo[3] = {2.0, 1.7, 0.0}, hi[3] = {2.6, 2.3, 1.6};
-  double t0 = 0, t1 = 1;
-  for (int i = 0; i < 3; ++i) {
-    const double d = b[i] - a[i];
-    if (std::fabs(d) < 1e-12) {
-      if (a[i] < lo[i] || a[i] > hi[i]) return false;
-      continue;
-    }
-    double ta = (lo[i] - a[i]) / d, tb = (hi[i] - a[i]) / d;
-    if (ta > tb) std::swap(ta, tb);
-    t0 = std::max(t0, ta);
-    t1 = std::min(t1, tb);
-  }
-  return t0 <= t1;
-}
 
 Label label_at(const SemiOcTree& t, const Point3& p) {
   const auto o = t.find_octant(p);

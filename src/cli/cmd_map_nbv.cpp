@@ -14,13 +14,13 @@
 #include "cloud_input.h"
 #include "commands.h"
 #include "option_checks.h"
-#include "semioctree/figures.h"
 #include "semioctree/nbv.h"
 #include "semioctree/occlusion.h"
 #include "semioctree/octomap_ext/file_io.h"
 #include "semioctree/octomap_ext/import.h"
 #include "semioctree/outputs.h"
 #include "semioctree/scan_io.h"
+#include "survey_session.h"
 
 namespace semioctree::cli {
 
@@ -142,13 +142,8 @@ void run_map_nbv(const MapNbvOptions& o) {
   slice.title = std::filesystem::path(o.map).filename().string();
   write_map_files(*tree, o.out, slice);
 
-  const OctantStatistics st = tree->statistics();
-  nlohmann::json by_label = nlohmann::json::object(), volume = nlohmann::json::object();
-  for (int l = 1; l < kLabelCount; ++l)
-    by_label[std::string(label_name(Label(l)))] = st.with_label(Label(l));
-  for (Label l : {Label::kEmpty, Label::kOccupied, Label::kOccluded, Label::kDoor, Label::kWindow,
-                  Label::kOut})
-    volume[std::string(label_name(l))] = volume_percent(st, l);
+  nlohmann::json volume;
+  const nlohmann::json octants = octants_json(*tree, volume);
   nlohmann::json scanner_list = nlohmann::json::array();
   for (const Point3& s : scanners) scanner_list.push_back(point_json(s));
   const bool complete = r.best && r.stop_percent < o.stop;
@@ -169,7 +164,7 @@ void run_map_nbv(const MapNbvOptions& o) {
       {"stop_percent", r.best ? nlohmann::json(r.stop_percent) : nlohmann::json(nullptr)},
       {"stop_threshold_percent", o.stop},
       {"complete", complete},
-      {"octants", {{"total", st.total()}, {"by_label", by_label}}},
+      {"octants", octants},
       {"volume_percent", volume},
       {"seconds_total", since(t_start)}};
   const std::string json_path = (std::filesystem::path(o.out) / "nbv.json").string();

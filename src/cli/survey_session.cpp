@@ -25,7 +25,9 @@ double since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-json map_json(const SemiOcTree& tree, json& volume_percent_out) {
+}  // namespace
+
+json octants_json(const SemiOcTree& tree, json& volume_percent_out) {
   const OctantStatistics st = tree.statistics();
   json by_level = json::array(), by_label = json::object();
   for (unsigned l = 0; l <= tree.coarse_level(); ++l) by_level.push_back(st.at_level(l));
@@ -38,8 +40,6 @@ json map_json(const SemiOcTree& tree, json& volume_percent_out) {
   volume_percent_out = pct;
   return {{"total", st.total()}, {"by_level", by_level}, {"by_label", by_label}};
 }
-
-}  // namespace
 
 double yaw_deg_of(const Eigen::Isometry3d& pose) {
   const Eigen::Vector3d x = pose.rotation() * Eigen::Vector3d::UnitX();
@@ -297,7 +297,7 @@ ScanOutcome SurveySession::add_scan(const IncomingScan& in,
   r["points_kept"] = pre.output_points;
   r["points_outside_limits"] = outside;
   json volume;
-  r["octants"] = map_json(map_.tree(), volume);
+  r["octants"] = octants_json(map_.tree(), volume);
   r["volume_percent"] = volume;
   // Eq 5 is measured from the NBV: without one there is nothing to report.
   r["stop_percent"] = nbv.best ? json(nbv.stop_percent) : json(nullptr);

@@ -86,6 +86,10 @@ class SurveySession {
   std::vector<nlohmann::json> records_;
 };
 
+// survey.json's "octants" of a map (total, by_level, by_label), and its
+// "volume_percent" (Table 1's labels) into `volume_percent_out`.
+nlohmann::json octants_json(const SemiOcTree& tree, nlohmann::json& volume_percent_out);
+
 // x, y, z and heading of a scanner pose.
 nlohmann::json pose_json(const Eigen::Isometry3d& scanner_to_survey);
 double yaw_deg_of(const Eigen::Isometry3d& pose);

@@ -2,8 +2,12 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
 #include <random>
+#include <utility>
 
+#include "semioctree/octomap_ext/semioctree.h"
 #include "semioctree/scan_io.h"
 
 namespace semioctree::testing {
@@ -53,6 +57,26 @@ inline Cloud::Ptr tilt(const Cloud& in, double alpha_deg, double beta_deg) {
     out->push_back(pcl::PointXYZ{float(q.x()), float(q.y()), float(q.z())});
   }
   return out;
+}
+
+// room_with_pillar's pillar, [2, 2.6] × [1.7, 2.3] × [0, 1.6].
+inline constexpr double kPillarLo[3] = {2.0, 1.7, 0.0}, kPillarHi[3] = {2.6, 2.3, 1.6};
+
+// Does the segment a→b pass through the pillar (slab test)?
+inline bool hits_pillar(const Point3& a, const Point3& b) {
+  double t0 = 0, t1 = 1;
+  for (int i = 0; i < 3; ++i) {
+    const double d = b[i] - a[i];
+    if (std::fabs(d) < 1e-12) {
+      if (a[i] < kPillarLo[i] || a[i] > kPillarHi[i]) return false;
+      continue;
+    }
+    double ta = (kPillarLo[i] - a[i]) / d, tb = (kPillarHi[i] - a[i]) / d;
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+  }
+  return t0 <= t1;
 }
 
 // A 4 × 4 × 2.4 m room (walls only, as after preprocessing) with a
