@@ -237,6 +237,19 @@ TEST(Scanner, SameSeedSameScanWhateverTheThreadCount) {
     EXPECT_EQ(one.row, many.row);
     EXPECT_EQ(one.col, many.col);
   }
+  // Progress: rows done never decrease, and the last call reports every row.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> calls;
+  o.threads = 2;
+  o.progress = [&](std::uint32_t done, std::uint32_t rows) { calls.emplace_back(done, rows); };
+  const ScanGrid g = scan_grid(c);
+  scan(*lab.caster, c, {5.2, 3.6, 30.0}, o);
+  ASSERT_FALSE(calls.empty());
+  for (std::size_t i = 0; i < calls.size(); ++i) {
+    EXPECT_EQ(calls[i].second, g.rows);
+    EXPECT_GE(calls[i].first, i > 0 ? calls[i - 1].first : 0u);
+  }
+  EXPECT_EQ(calls.back().first, g.rows);
+  o.progress = nullptr;
   o.seed = 43;
   const Scan other = scan(*lab.caster, c, {5.2, 3.6, 30.0}, o);
   ASSERT_EQ(one.points.size(), other.points.size());  // same rays hit ...
