@@ -421,6 +421,7 @@ TEST(Coverage, CountsSamplesWithAPointWithinTheTolerance) {
   // The flags behind those counts, sample by sample.
   EXPECT_EQ(covered_samples(ref, as_float),
             (std::vector<bool>{true, true, true, true, false, true}));
+  EXPECT_EQ(count_covered(covered_samples(ref, as_float)).covered, c.covered);
   EXPECT_EQ(covered_samples(ref, as_float, 0.0285),
             (std::vector<bool>{false, true, true, true, false, false}));
   EXPECT_EQ(measure_coverage(CoverageReference{}, measured).percent, 0.0);

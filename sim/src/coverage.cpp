@@ -721,16 +721,20 @@ std::vector<bool> flags(const CoverageReference& reference, std::vector<Eigen::V
 
 Coverage measure(const CoverageReference& reference, std::vector<Eigen::Vector3d> points,
                  double tolerance) {
+  return count_covered(flags(reference, std::move(points), tolerance));
+}
+
+}  // namespace
+
+Coverage count_covered(const std::vector<bool>& covered) {
   Coverage c;
-  c.reference_points = reference.points.size();
-  for (bool f : flags(reference, std::move(points), tolerance)) c.covered += f;
+  c.reference_points = covered.size();
+  for (bool f : covered) c.covered += f;
   c.percent = c.reference_points
                   ? 100.0 * static_cast<double>(c.covered) / static_cast<double>(c.reference_points)
                   : 0.0;
   return c;
 }
-
-}  // namespace
 
 bool segment_through_opening(const Scene& scene, const Eigen::Vector3d& a,
                              const Eigen::Vector3d& b) {

@@ -47,14 +47,6 @@ double since(std::chrono::steady_clock::time_point t0) {
 // survey.json lists the scene elements with the most missed samples, not all of them.
 constexpr std::size_t kMissedPartsListed = 8;
 
-sim::Coverage count_covered(const std::vector<bool>& covered) {
-  sim::Coverage c;
-  c.reference_points = covered.size();
-  for (bool f : covered) c.covered += f;
-  c.percent = c.reference_points ? 100.0 * double(c.covered) / double(c.reference_points) : 0.0;
-  return c;
-}
-
 nlohmann::json true_pose_json(const sim::Scan& s) {
   return pose_json(s.sensor_to_world());
 }
@@ -230,7 +222,7 @@ void run_survey(const SurveyOptions& o) {
     const std::string cache = o.cache.empty() ? sim::default_cache_dir() : o.cache;
     const sim::CoverageReference ref = sim::load_or_compute_coverage_reference(truth, cache);
     const std::vector<bool> covered = sim::covered_samples(ref, measured);
-    const sim::Coverage c = count_covered(covered);
+    const sim::Coverage c = sim::count_covered(covered);
     const sim::MissedSamples missed =
         sim::explain_missed_samples(truth, ref, covered, optical_centres, o.plan.threads);
     auto percent_of = [&](std::size_t n) {

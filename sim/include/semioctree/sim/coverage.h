@@ -112,6 +112,9 @@ Coverage measure_coverage(const CoverageReference& reference,
                           const std::vector<Eigen::Vector3f>& measured_points_world,
                           double tolerance = 0.03);
 
+// The counts of covered_samples' flags (what measure_coverage returns).
+Coverage count_covered(const std::vector<bool>& covered);
+
 // One flag per reference sample (in the order of reference.points): a measured point
 // (world frame) within `tolerance` metres. measure_coverage counts these flags.
 std::vector<bool> covered_samples(const CoverageReference& reference,
