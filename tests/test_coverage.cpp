@@ -291,6 +291,52 @@ TEST(CoverageReference, LeavesOutHiddenPockets) {
   EXPECT_GE(room_walls_seen, room_walls * 999 / 1000);
 }
 
+// A survey area the robot fits in but cannot drive into: a counter (1 m high, too high
+// to drive over, low enough to see over) across the whole room. The reference is what a
+// survey could see, so it holds no position east of the counter nor what only those
+// positions see: the counter's east face. Before the positions had to be reachable, the
+// lab's reference held 3 such positions (two between bench-3 and the south wall, one
+// between the cabinets) and 1.2 % more samples.
+TEST(CoverageReference, LeavesOutPositionsTheRobotCannotDriveTo) {
+  Scene scene = load("box-room");
+  Box counter;  // x 3.9 .. 4.1, the room's whole width, z 0 .. 1
+  counter.center = {4.0, 2.0, 0.5};
+  counter.size = {0.2, 4.0, 1.0};
+  counter.name = "counter";
+  scene.boxes.push_back(counter);
+  scene.survey_area = std::vector<Eigen::Vector2d>{{0, 0}, {6, 0}, {6, 4}, {0, 4}};
+  const GroundTruth truth(scene);
+
+  const FloorPlan plan = truth.floor_plan(0.05);
+  EXPECT_TRUE(plan.in_survey_area({5.0, 2.0}));
+  EXPECT_TRUE(truth.standing_free({5.0, 2.0}));
+  EXPECT_FALSE(plan.reachable_near({5.0, 2.0}));
+  EXPECT_TRUE(plan.reachable_near(scene.robot.start));
+  EXPECT_TRUE(plan.reachable_near({3.3, 3.4}));  // 0.6 m from the counter and the wall
+
+  const std::vector<Eigen::Vector3d> grid = coverage_grid_positions(truth, 0.5);
+  ASSERT_FALSE(grid.empty());
+  for (const auto& p : grid) EXPECT_LT(p.x(), 3.9 - 0.5) << p.transpose();
+  EXPECT_EQ(grid.size(), 6u * 7u);  // x 0.5 .. 3.0, y 0.5 .. 3.5 (start 2.0, 1.5)
+
+  const auto samples = truth.surface_samples(0.02);
+  const CoverageReference ref = compute_coverage_reference(truth, 0.5, 0.02);
+  const std::vector<bool> in = visible_flags(ref);
+  std::size_t east_face = 0, west_face = 0, west_seen = 0;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    if (samples[i].part.kind != PartKind::box) continue;
+    if (samples[i].normal.x() > 0.5) {
+      ++east_face;
+      EXPECT_FALSE(in[i]) << samples[i].position.transpose();
+    } else if (samples[i].normal.x() < -0.5) {
+      ++west_face;
+      west_seen += in[i];
+    }
+  }
+  EXPECT_GT(east_face, 9000u);  // 4 x 1 m² at 2 cm
+  EXPECT_EQ(west_seen, west_face);
+}
+
 TEST(CoverageReference, OneDoorWindowSeesTheSillButNoOuterFace) {
   const Scene scene = load("one-door-window");
   const GroundTruth truth(scene);

@@ -37,8 +37,9 @@ double seconds_since(Clock::time_point t0) {
 
 // Bump when the visibility rule, the grid of positions or the file layout changes: old
 // cache files then get another name and are never read.
-constexpr std::uint32_t kRuleVersion = 2;  // 2: nothing seen through an opening
-constexpr double kPlanCell = 0.05;         // floor-plan cell used for the survey area
+constexpr std::uint32_t kRuleVersion =
+    3;  // 2: nothing seen through an opening; 3: reachable positions only
+constexpr double kPlanCell = 0.05;  // floor-plan cell used for the survey area
 
 // The scanner-limit part of the rule, before any ray is cast.
 struct Limits {
@@ -774,7 +775,7 @@ std::vector<Eigen::Vector3d> coverage_grid_positions(const GroundTruth& truth,
   for (long j = j0; j <= j1; ++j)
     for (long i = i0; i <= i1; ++i) {
       const Eigen::Vector2d p = start + grid_spacing * Eigen::Vector2d(i, j);
-      if (plan.in_survey_area(p) && truth.standing_free(p))
+      if (plan.in_survey_area(p) && plan.reachable_near(p) && truth.standing_free(p))
         out.emplace_back(p.x(), p.y(), scene.scanner.height);
     }
   return out;

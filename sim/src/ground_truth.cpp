@@ -208,6 +208,16 @@ bool GroundTruth::standing_free(const Eigen::Vector2d& p) const {
   return true;
 }
 
+bool FloorPlan::reachable_near(const Eigen::Vector2d& p) const {
+  const int ix = static_cast<int>(std::floor((p.x() - origin.x()) / cell));
+  const int iy = static_cast<int>(std::floor((p.y() - origin.y()) / cell));
+  for (int y = iy - 1; y <= iy + 1; ++y)
+    for (int x = ix - 1; x <= ix + 1; ++x)
+      if (x >= 0 && y >= 0 && x < nx && y < ny && reachable[static_cast<std::size_t>(y) * nx + x])
+        return true;
+  return false;
+}
+
 bool FloorPlan::in_survey_area(const Eigen::Vector2d& p) const {
   const int ix = static_cast<int>(std::floor((p.x() - origin.x()) / cell));
   const int iy = static_cast<int>(std::floor((p.y() - origin.y()) / cell));
@@ -325,15 +335,10 @@ FloorPlan GroundTruth::floor_plan(double cell) const {
     if (comp[k] >= 0) plan.room[k] = room_of_comp[static_cast<std::size_t>(comp[k])];
   plan.start_room = plan.room_at(scene_.robot.start);
 
-  plan.survey.assign(n, false);
-  if (scene_.survey_area) {
-    for (int iy = 0; iy < plan.ny; ++iy)
-      for (int ix = 0; ix < plan.nx; ++ix)
-        plan.survey[static_cast<std::size_t>(iy) * plan.nx + ix] =
-            point_in_polygon(*scene_.survey_area, centre(ix, iy));
-  } else {
-    // Free floor: something to stand on just below z = 0, nothing from there up to the
-    // scanner; then keep the robot's radius from anything else, and what is reachable.
+  // Free floor: something to stand on just below z = 0, nothing from there up to the
+  // scanner; then keep the robot's radius from anything else, and what is reachable.
+  plan.reachable.assign(n, false);
+  {
     const double h = scene_.scanner.height;
     std::vector<bool> free(n, false);
     for (int iy = 0; iy < plan.ny; ++iy)
@@ -366,11 +371,27 @@ FloorPlan GroundTruth::floor_plan(double cell) const {
     std::vector<std::size_t> s_sizes;
     std::vector<bool> s_border;
     const std::vector<int> reachable = components(plan.nx, plan.ny, stand, s_sizes, s_border);
+    // The start's component; a start that stands clear (standing_free) may still have its
+    // cell centre a hair too close to something on this grid: then a neighbour's.
     const int sx = static_cast<int>(std::floor((scene_.robot.start.x() - plan.origin.x()) / cell));
     const int sy = static_cast<int>(std::floor((scene_.robot.start.y() - plan.origin.y()) / cell));
-    const int start_comp = reachable[static_cast<std::size_t>(sy) * plan.nx + sx];
+    int start_comp = -1;
+    for (int d = 0; d < 9 && start_comp < 0; ++d) {
+      const int x = sx + (d == 0 ? 0 : (d - 1) % 3 - 1), y = sy + (d == 0 ? 0 : (d - 1) / 3 - 1);
+      if (x >= 0 && y >= 0 && x < plan.nx && y < plan.ny)
+        start_comp = reachable[static_cast<std::size_t>(y) * plan.nx + x];
+    }
     if (start_comp >= 0)
-      for (std::size_t k = 0; k < n; ++k) plan.survey[k] = reachable[k] == start_comp;
+      for (std::size_t k = 0; k < n; ++k) plan.reachable[k] = reachable[k] == start_comp;
+  }
+  if (scene_.survey_area) {
+    plan.survey.assign(n, false);
+    for (int iy = 0; iy < plan.ny; ++iy)
+      for (int ix = 0; ix < plan.nx; ++ix)
+        plan.survey[static_cast<std::size_t>(iy) * plan.nx + ix] =
+            point_in_polygon(*scene_.survey_area, centre(ix, iy));
+  } else {
+    plan.survey = plan.reachable;
   }
   plan.survey_area_m2 =
       static_cast<double>(std::count(plan.survey.begin(), plan.survey.end(), true)) * cell * cell;

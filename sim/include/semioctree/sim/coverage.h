@@ -21,7 +21,9 @@ struct CoverageReference {
   double sample_spacing = 0.02;  // spacing passed to GroundTruth::surface_samples
   std::size_t sample_count = 0;  // all surface samples of the scene at that spacing
   // Optical centres of the grid positions (world frame, z = scanner height): on a grid
-  // anchored at robot.start, inside the survey area, where the robot can stand.
+  // anchored at robot.start, inside the survey area, where the robot can stand and can
+  // drive to from robot.start (FloorPlan::reachable): a pocket it fits in but cannot
+  // enter is no scan position of any survey.
   std::vector<Eigen::Vector3d> positions;
   // Indices into GroundTruth::surface_samples(sample_spacing) of the visible samples,
   // ascending, and their positions (what measure_coverage compares with).

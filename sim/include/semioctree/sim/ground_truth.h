@@ -49,13 +49,21 @@ struct FloorPlan {
   // building. Rooms are numbered by decreasing area.
   std::vector<int> room;
   std::vector<double> room_area;  // m², floor area within the walls
+  // Cells the robot can reach: free floor (something to stand on, nothing above up to
+  // the scanner) with every cell centre within the robot's radius free too, connected
+  // to robot.start's cell through such cells (4-neighbours). Whatever survey_area says:
+  // a pocket the robot fits in but cannot drive into is not reachable.
+  std::vector<bool> reachable;
   // Cells where the robot may stand: inside survey_area if the scene gives it, else
-  // free floor reachable from robot.start with the robot's radius.
+  // the reachable cells.
   std::vector<bool> survey;
   double survey_area_m2 = 0.0;
   int start_room = -1;  // room of robot.start
 
   bool in_survey_area(const Eigen::Vector2d& p) const;
+  // True if the cell of p or one of its 8 neighbours is reachable (a point a cell's
+  // width from a reachable cell centre: the grid cannot tell closer).
+  bool reachable_near(const Eigen::Vector2d& p) const;
   int room_at(const Eigen::Vector2d& p) const;
 };
 
