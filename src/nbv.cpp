@@ -640,14 +640,21 @@ std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry&
 
   // The candidate grid: every m-th leaf cell (world-aligned), at its centre.
   const std::int64_t m = std::max<std::int64_t>(1, std::llround(params.candidate_spacing / r));
-  auto first_on_grid = [&](std::int64_t v) {  // smallest g >= v with g ≡ m/2 (mod m)
-    const std::int64_t off = m / 2;
+  std::int64_t off_x = m / 2, off_y = m / 2;  // grid points: leaf cells ≡ off (mod m)
+  if (params.grid_anchor) {
+    octomap::OcTreeKey ak;
+    if (!tree.key_of(Point3(params.grid_anchor->x, params.grid_anchor->y, 0.0), ak))
+      throw std::invalid_argument("NbvParams: the candidate grid's anchor is beyond the key range");
+    off_x = ((std::int64_t(ak.k[0]) - 32768) % m + m) % m;
+    off_y = ((std::int64_t(ak.k[1]) - 32768) % m + m) % m;
+  }
+  auto first_on_grid = [&](std::int64_t v, std::int64_t off) {  // smallest g >= v, g ≡ off
     std::int64_t d = v - off;
     std::int64_t q = d >= 0 ? (d + m - 1) / m : -((-d) / m);
     return off + q * m;
   };
-  for (std::int64_t gy = first_on_grid(y0 + 1); gy < y0 + ny - 1; gy += m) {
-    for (std::int64_t gx = first_on_grid(x0 + 1); gx < x0 + nx - 1; gx += m) {
+  for (std::int64_t gy = first_on_grid(y0 + 1, off_y); gy < y0 + ny - 1; gy += m) {
+    for (std::int64_t gx = first_on_grid(x0 + 1, off_x); gx < x0 + nx - 1; gx += m) {
       ++rep.grid_points;
       const Point3 p((double(gx) + 0.5) * r, (double(gy) + 0.5) * r, robot.scanner_height);
       const auto o = tree.find_octant(p);

@@ -568,6 +568,26 @@ TEST(Nbv, CandidateGridGivesSeveralPositionsPerLargeOctant) {
   EXPECT_EQ(got.size(), 64u);
 }
 
+TEST(Nbv, CandidateGridPassesThroughItsAnchor) {
+  Map m(5, 5, 3);
+  m.walls(4.0, 4.0, 2.4);
+  NbvParams p;
+  p.candidate_spacing = 0.4;
+  const std::vector<Point3> fixed = find_candidates(m.t, RobotGeometry{}, {2.0, 2.0, 0}, {}, p);
+  p.grid_anchor = Point3(1.93, 2.11, 1.5);  // leaf cell centre (1.925, 2.125)
+  const std::vector<Point3> got = find_candidates(m.t, RobotGeometry{}, {2.0, 2.0, 0}, {}, p);
+  EXPECT_TRUE(has_candidate_near(got, 1.925, 2.125));
+  EXPECT_FALSE(has_candidate_near(fixed, 1.925, 2.125));
+  for (const Point3& c : got) {
+    EXPECT_NEAR(std::remainder(c.x - 1.925, 0.4), 0.0, 1e-9);
+    EXPECT_NEAR(std::remainder(c.y - 2.125, 0.4), 0.0, 1e-9);
+  }
+  // Clear from 0.625 to 3.425 (see above): x 0.725 ... 3.125 (7), y 0.925 ... 3.325 (7).
+  EXPECT_EQ(got.size(), 49u);
+  p.grid_anchor = Point3(-1e6, 0, 0);  // beyond OctoMap's key range
+  EXPECT_THROW(find_candidates(m.t, RobotGeometry{}, {2.0, 2.0, 0}, {}, p), std::invalid_argument);
+}
+
 TEST(Nbv, UnreachablePocketOfFreeFloorGivesNoCandidates) {
   Map m(5, 5, 3);
   m.walls(4.0, 4.0, 2.4);

@@ -2,7 +2,8 @@
 // their scores and the stop percentage.
 //
 // Candidates. A world-aligned grid of positions (spacing `candidate_spacing`,
-// at the centres of leaf cells) on the horizontal plane at scanner height; a
+// at the centres of leaf cells, through NbvParams::grid_anchor if given) on the
+// horizontal plane at scanner height; a
 // grid point is a candidate when
 //  * the octant holding (x, y, scanner height) is `empty` (or a `scan`/`nbv`
 //    marker): inside the surveyed room, not `out`, `door`, `window`, occluded;
@@ -136,7 +137,14 @@ struct NbvParams {
   int method = 1;               // 1: all levels, volume-weighted; 2: one level; 3: frontier surface
   unsigned level = kLeafLevel;  // method 2: the level ℓ (kLeafLevel: the tree's leaf)
   double candidate_spacing = 0.5;  // m, rounded to a whole number of leaves (≥ 1)
-  unsigned threads = 0;            // 0: one per core; results do not depend on it
+  // A point the candidate grid passes through: the leaf cell holding it (x, y; z
+  // ignored) is a grid point. The survey anchors the grid at its first scan position, as
+  // the coverage reference anchors its grid at the robot's start, so that the planner
+  // chooses among the positions the reference (and `coverage-bound`) are defined on:
+  // at 0.5 m the lab's fixed grid (below) has no candidate where that grid has them.
+  // Empty: the grid points are the leaf cells ≡ m/2 (mod m), m = spacing in leaves.
+  std::optional<Point3> grid_anchor;
+  unsigned threads = 0;  // 0: one per core; results do not depend on it
   // Range and elevation limits of the scanner (position ignored): for the
   // score, the stop percentage and the blind zone of past scans.
   ScannerView limits;
@@ -182,7 +190,7 @@ struct NbvResult {
 };
 
 // The functions below throw std::invalid_argument for a method other than 1, 2
-// or 3, or a method-2 level finer than the tree's leaf.
+// or 3, a method-2 level finer than the tree's leaf, or a grid anchor beyond the key range.
 
 // Feasible candidate positions (scanner positions, z = scanner height), in
 // grid order (y, then x). `robot_position`: the robot on the floor (its z is

@@ -128,6 +128,7 @@ void run_map_nbv(const MapNbvOptions& o) {
   params.candidate_spacing = o.candidate_spacing;
   params.threads = o.threads;
   params.limits = o.limits;
+  params.grid_anchor = scanners.front();  // the first scan position, as `survey` does
   const auto t2 = std::chrono::steady_clock::now();
   const NbvResult r =
       next_best_view(*tree, geometry, Point3(robot.x, robot.y, 0.0), scanners, params);

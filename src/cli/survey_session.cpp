@@ -239,6 +239,7 @@ ScanOutcome SurveySession::add_scan(const IncomingScan& in,
   t0 = std::chrono::steady_clock::now();
   const Point3 robot = robot_position.value_or(scanner);
   NbvParams nbv_params = params_.nbv;
+  nbv_params.grid_anchor = map_.scanners().front();  // see NbvParams::grid_anchor
   // Scoring usually takes a few seconds; a large map (a real scan seen through
   // its openings) can take minutes: then say how far it is, every 2 s.
   ProgressLine progress(stdout);
