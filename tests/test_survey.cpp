@@ -362,7 +362,10 @@ TEST_P(LabSurvey, StopsWithinFiveScansAndCoversTheRoom) {
   EXPECT_EQ(j["stopped_because"], "stop_percentage");
   EXPECT_LE(j["scans"].size(), 5u);
   EXPECT_LE(j["scans"].back()["stop_percent"].get<double>(), 0.1);
-  EXPECT_GE(j["coverage"]["percent"].get<double>(), 90.0);
+  // Seeds 1-3 measured 96.22 / 96.23 / 96.23 % (5 scans); the acceptance asks 97 %, which
+  // the planner does not reach yet (README, known limits). Guards what it does reach:
+  // with the candidate grid fixed to the world it stopped after 4 scans, below this.
+  EXPECT_GE(j["coverage"]["percent"].get<double>(), 95.5);
   // The lab's window (2.4 × 1.5 m) and three doors (1.0, 0.9, 0.9 × 2.1 m), each found
   // once; the openings stage measures them in whole leaves of the 5 cm grid, so each edge
   // may lose up to a leaf.
