@@ -221,8 +221,10 @@ void add_map_nbv_command(CLI::App& app) {
                   "occlusion frontier facing the position (surface, ours)")
       ->check(CLI::IsMember({1, 3}))
       ->capture_default_str();
-  cmd->add_option("--candidate-spacing", o->candidate_spacing,
-                  "spacing of the NBV candidate grid at scanner height, m")
+  cmd->add_option(
+         "--candidate-spacing", o->candidate_spacing,
+         "spacing of the NBV candidate grid at scanner height (a grid through the first scan "
+         "position), m")
       ->check(finite_positive(10))
       ->capture_default_str();
   cmd->add_option("--robot-radius", o->robot_radius, "safety cylinder radius, m (0.05 to 5)")

@@ -71,8 +71,10 @@ void add_planning_options(CLI::App& cmd, PlanningOptions& o) {
                  "method 2: the octree level scored, 0 = coarse voxels ... k = leaf (default: the "
                  "leaf)")
       ->check(whole_in(0, 16));
-  cmd.add_option("--candidate-spacing", o.candidate_spacing,
-                 "spacing of the NBV candidate grid at scanner height, m")
+  cmd.add_option(
+         "--candidate-spacing", o.candidate_spacing,
+         "spacing of the NBV candidate grid at scanner height (a grid through the first scan "
+         "position), m")
       ->check(finite_positive(10))
       ->capture_default_str();
   cmd.add_option("--target-points", o.target_points,
