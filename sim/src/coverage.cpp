@@ -36,9 +36,9 @@ double seconds_since(Clock::time_point t0) {
 }
 
 // Bump when the visibility rule, the grid of positions or the file layout changes: old
-// cache files then get another name and are never read.
-constexpr std::uint32_t kRuleVersion =
-    3;  // 2: nothing seen through an opening; 3: reachable positions only
+// cache files then get another name and are never read. 2: nothing seen through an
+// opening; 3: reachable positions only.
+constexpr std::uint32_t kRuleVersion = 3;
 constexpr double kPlanCell = 0.05;  // floor-plan cell used for the survey area
 
 // The scanner-limit part of the rule, before any ray is cast.

@@ -208,28 +208,30 @@ bool GroundTruth::standing_free(const Eigen::Vector2d& p) const {
   return true;
 }
 
+std::ptrdiff_t FloorPlan::index_of(const Eigen::Vector2d& p, int dx, int dy) const {
+  const int ix = static_cast<int>(std::floor((p.x() - origin.x()) / cell)) + dx;
+  const int iy = static_cast<int>(std::floor((p.y() - origin.y()) / cell)) + dy;
+  if (ix < 0 || iy < 0 || ix >= nx || iy >= ny) return -1;
+  return static_cast<std::ptrdiff_t>(iy) * nx + ix;
+}
+
 bool FloorPlan::reachable_near(const Eigen::Vector2d& p) const {
-  const int ix = static_cast<int>(std::floor((p.x() - origin.x()) / cell));
-  const int iy = static_cast<int>(std::floor((p.y() - origin.y()) / cell));
-  for (int y = iy - 1; y <= iy + 1; ++y)
-    for (int x = ix - 1; x <= ix + 1; ++x)
-      if (x >= 0 && y >= 0 && x < nx && y < ny && reachable[static_cast<std::size_t>(y) * nx + x])
-        return true;
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx) {
+      const std::ptrdiff_t k = index_of(p, dx, dy);
+      if (k >= 0 && reachable[static_cast<std::size_t>(k)]) return true;
+    }
   return false;
 }
 
 bool FloorPlan::in_survey_area(const Eigen::Vector2d& p) const {
-  const int ix = static_cast<int>(std::floor((p.x() - origin.x()) / cell));
-  const int iy = static_cast<int>(std::floor((p.y() - origin.y()) / cell));
-  if (ix < 0 || iy < 0 || ix >= nx || iy >= ny) return false;
-  return survey[static_cast<std::size_t>(iy) * nx + ix];
+  const std::ptrdiff_t k = index_of(p);
+  return k >= 0 && survey[static_cast<std::size_t>(k)];
 }
 
 int FloorPlan::room_at(const Eigen::Vector2d& p) const {
-  const int ix = static_cast<int>(std::floor((p.x() - origin.x()) / cell));
-  const int iy = static_cast<int>(std::floor((p.y() - origin.y()) / cell));
-  if (ix < 0 || iy < 0 || ix >= nx || iy >= ny) return -1;
-  return room[static_cast<std::size_t>(iy) * nx + ix];
+  const std::ptrdiff_t k = index_of(p);
+  return k >= 0 ? room[static_cast<std::size_t>(k)] : -1;
 }
 
 namespace {
@@ -373,14 +375,13 @@ FloorPlan GroundTruth::floor_plan(double cell) const {
     const std::vector<int> reachable = components(plan.nx, plan.ny, stand, s_sizes, s_border);
     // The start's component; a start that stands clear (standing_free) may still have its
     // cell centre a hair too close to something on this grid: then a neighbour's.
-    const int sx = static_cast<int>(std::floor((scene_.robot.start.x() - plan.origin.x()) / cell));
-    const int sy = static_cast<int>(std::floor((scene_.robot.start.y() - plan.origin.y()) / cell));
-    int start_comp = -1;
-    for (int d = 0; d < 9 && start_comp < 0; ++d) {
-      const int x = sx + (d == 0 ? 0 : (d - 1) % 3 - 1), y = sy + (d == 0 ? 0 : (d - 1) / 3 - 1);
-      if (x >= 0 && y >= 0 && x < plan.nx && y < plan.ny)
-        start_comp = reachable[static_cast<std::size_t>(y) * plan.nx + x];
-    }
+    const std::ptrdiff_t k0 = plan.index_of(scene_.robot.start);
+    int start_comp = k0 >= 0 ? reachable[static_cast<std::size_t>(k0)] : -1;
+    for (int dy = -1; dy <= 1 && start_comp < 0; ++dy)
+      for (int dx = -1; dx <= 1 && start_comp < 0; ++dx) {
+        const std::ptrdiff_t k = plan.index_of(scene_.robot.start, dx, dy);
+        if (k >= 0) start_comp = reachable[static_cast<std::size_t>(k)];
+      }
     if (start_comp >= 0)
       for (std::size_t k = 0; k < n; ++k) plan.reachable[k] = reachable[k] == start_comp;
   }

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cstddef>
 #include <memory>
 #include <vector>
 
@@ -60,6 +61,8 @@ struct FloorPlan {
   double survey_area_m2 = 0.0;
   int start_room = -1;  // room of robot.start
 
+  // Row-major index of the cell holding p, moved by (dx, dy) cells; -1 off the grid.
+  std::ptrdiff_t index_of(const Eigen::Vector2d& p, int dx = 0, int dy = 0) const;
   bool in_survey_area(const Eigen::Vector2d& p) const;
   // True if the cell of p or one of its 8 neighbours is reachable (a point a cell's
   // width from a reachable cell centre: the grid cannot tell closer).
