@@ -140,6 +140,13 @@ int samples_of(const Candidate& c, unsigned coarse_level, LatticePoint out[9]) {
 
 }  // namespace
 
+std::vector<ScannerView> scanner_views(const std::vector<Point3>& positions,
+                                       const ScannerView& limits) {
+  std::vector<ScannerView> out(positions.size(), limits);
+  for (std::size_t i = 0; i < positions.size(); ++i) out[i].position = positions[i];
+  return out;
+}
+
 Visibility point_visibility(const SemiOcTree& tree, const std::vector<ScannerView>& views,
                             const Point3& p) {
   std::vector<ViewLimits> limits;

@@ -43,13 +43,7 @@ SurveyMap::SurveyMap(const SurveyMapParams& params) : params_(params), merged_(n
 }
 
 std::vector<ScannerView> SurveyMap::views() const {
-  std::vector<ScannerView> out;
-  for (const Point3& s : scanners_) {
-    ScannerView v = params_.limits;
-    v.position = s;
-    out.push_back(v);
-  }
-  return out;
+  return scanner_views(scanners_, params_.limits);
 }
 
 namespace {

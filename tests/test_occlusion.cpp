@@ -25,6 +25,28 @@ Label label_at(const SemiOcTree& t, const Point3& p) {
   return o ? o->label() : Label::kUnknown;
 }
 
+TEST(Occlusion, ScannerViewsCarryTheLimitsToEveryPosition) {
+  ScannerView limits;
+  limits.position = {9, 9, 9};  // ignored
+  limits.min_range = 1.25;
+  limits.max_range = 20;
+  limits.elevation_min_deg = -41.5;
+  limits.elevation_max_deg = 80;
+  const std::vector<Point3> at = {{1, 2, 1.5}, {3, 4, 1.2}};
+  const std::vector<ScannerView> views = scanner_views(at, limits);
+  ASSERT_EQ(views.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(views[i].position.x, at[i].x);
+    EXPECT_EQ(views[i].position.y, at[i].y);
+    EXPECT_EQ(views[i].position.z, at[i].z);
+    EXPECT_EQ(views[i].min_range, 1.25);
+    EXPECT_EQ(views[i].max_range, 20);
+    EXPECT_EQ(views[i].elevation_min_deg, -41.5);
+    EXPECT_EQ(views[i].elevation_max_deg, 80);
+  }
+  EXPECT_TRUE(scanner_views({}, limits).empty());
+}
+
 TEST(Occlusion, ShadowBehindAnObstacleMatchesGeometryWithinOneLeaf) {
   const auto tree = discretize(room_with_pillar(), 2.4, {0.05, 0.8});
   ScannerView view{Point3(1.0, 2.0, 1.2)};

@@ -57,6 +57,11 @@ struct OcclusionReport {
   std::size_t empty = 0, occluded = 0, out = 0;  // leaf octants labelled (before merging)
 };
 
+// One view per scanner position, each with the range and elevation limits of `limits`
+// (its position ignored).
+std::vector<ScannerView> scanner_views(const std::vector<Point3>& positions,
+                                       const ScannerView& limits);
+
 // How well `p` is seen from the best of `views`.
 Visibility point_visibility(const SemiOcTree& tree, const std::vector<ScannerView>& views,
                             const Point3& p);

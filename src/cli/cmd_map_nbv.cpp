@@ -95,12 +95,7 @@ void run_map_nbv(const MapNbvOptions& o) {
       // Space the map does not hold: seen from a scanner (then empty: nothing returned
       // there) or hidden (occluded), as the occlusion study decides.
       const auto t1 = std::chrono::steady_clock::now();
-      std::vector<ScannerView> views;
-      for (const Point3& s : scanners) {
-        ScannerView v = o.limits;
-        v.position = s;
-        views.push_back(v);
-      }
+      const std::vector<ScannerView> views = scanner_views(scanners, o.limits);
       OcclusionParams op;
       op.scope = OcclusionScope::kUnknown;
       op.threads = o.threads;
