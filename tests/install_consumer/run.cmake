@@ -2,43 +2,28 @@
 # tests/install_consumer against it with find_package(semioctree), run it; build
 # examples/ on its own against the same prefix.
 # Variables: BUILD_DIR, SOURCE_DIR, WORK_DIR.
+
+# Runs a command; on failure stops with `what`, the exit code and the command's output.
+function(run_step what)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${what} failed (${rc}):\n${out}\n${err}")
+  endif()
+  set(step_output "${out}" PARENT_SCOPE)
+endfunction()
+
+# Configures and builds the project in `source` against the installed prefix.
+function(build_against_prefix what source binary)
+  run_step("configuring ${what}" ${CMAKE_COMMAND} -S ${source} -B ${binary}
+           -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=Release)
+  run_step("building ${what}" ${CMAKE_COMMAND} --build ${binary})
+endfunction()
+
 file(REMOVE_RECURSE ${WORK_DIR})
-execute_process(COMMAND ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK_DIR}/prefix
-                RESULT_VARIABLE rc OUTPUT_QUIET)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "cmake --install failed: ${rc}")
-endif()
-execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR}/tests/install_consumer -B ${WORK_DIR}/build
-                        -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=Release
-                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "configuring the consumer failed:\n${out}\n${err}")
-endif()
-execute_process(COMMAND ${CMAKE_COMMAND} --build ${WORK_DIR}/build RESULT_VARIABLE rc
-                OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "building the consumer failed:\n${out}\n${err}")
-endif()
-execute_process(COMMAND ${WORK_DIR}/build/consumer ${WORK_DIR}/tree.ot RESULT_VARIABLE rc
-                OUTPUT_VARIABLE out)
-message(STATUS "${out}")
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "the consumer failed with exit code ${rc}")
-endif()
-execute_process(COMMAND ${WORK_DIR}/build/reader ${WORK_DIR}/tree.ot RESULT_VARIABLE rc
-                OUTPUT_VARIABLE out ERROR_VARIABLE err)
-message(STATUS "${out}")
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "the reader (OctoMap's factory only) failed with exit code ${rc}:\n${err}")
-endif()
-execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR}/examples -B ${WORK_DIR}/examples
-                        -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=Release
-                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "configuring examples/ on its own failed:\n${out}\n${err}")
-endif()
-execute_process(COMMAND ${CMAKE_COMMAND} --build ${WORK_DIR}/examples RESULT_VARIABLE rc
-                OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "building examples/ on its own failed:\n${out}\n${err}")
-endif()
+run_step("cmake --install" ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK_DIR}/prefix)
+build_against_prefix("the consumer" ${SOURCE_DIR}/tests/install_consumer ${WORK_DIR}/build)
+run_step("the consumer" ${WORK_DIR}/build/consumer ${WORK_DIR}/tree.ot)
+message(STATUS "${step_output}")
+run_step("the reader (OctoMap's factory only)" ${WORK_DIR}/build/reader ${WORK_DIR}/tree.ot)
+message(STATUS "${step_output}")
+build_against_prefix("examples/ on its own" ${SOURCE_DIR}/examples ${WORK_DIR}/examples)
