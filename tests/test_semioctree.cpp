@@ -2,12 +2,14 @@
 // statistics, compaction and the .ot round trip.
 #include <gtest/gtest.h>
 #include <octomap/AbstractOcTree.h>
+#include <octomap/OcTree.h>
 
 #include <cmath>
 #include <map>
 #include <random>
 #include <sstream>
 #include <tuple>
+#include <type_traits>
 
 #include "semioctree/octomap_ext/semioctree.h"
 
@@ -298,6 +300,72 @@ TEST(SemiOcTree, ReadDataRejectsCorruptPayload) {
   EXPECT_EQ(back.size(), 0u);
   std::istringstream truncated(buf.str().substr(0, 30));
   EXPECT_THROW(back.readData(truncated), FileFormatError);
+}
+
+// OctoMap's own edits bypass the labels and the coarse index: updateNode would
+// change log-odds under an unchanged label, or create a coarse voxel the index
+// never hears of; deleteNode would free an indexed node. They must be refused.
+template <class T, class = void>
+struct HasDeleteNode : std::false_type {};
+template <class T>
+struct HasDeleteNode<T, std::void_t<decltype(std::declval<T&>().deleteNode(
+                            std::declval<const octomap::OcTreeKey&>(), 0u))>> : std::true_type {};
+template <class T, class = void>
+struct HasSwapContent : std::false_type {};
+template <class T>
+struct HasSwapContent<T, std::void_t<decltype(std::declval<T&>().swapContent(std::declval<T&>()))>>
+    : std::true_type {};
+static_assert(HasDeleteNode<octomap::OcTree>::value && HasSwapContent<octomap::OcTree>::value,
+              "the detectors must see OctoMap's own functions");
+static_assert(!HasDeleteNode<SemiOcTree>::value, "deleteNode would free indexed coarse voxels");
+static_assert(!HasSwapContent<SemiOcTree>::value, "swapContent would leave both indexes stale");
+
+TEST(SemiOcTree, RefusesOctoMapOccupancyUpdates) {
+  SemiOcTree t(0.1, 0.8);
+  t.set_label(key_at(t, 0.05, 0.05, 0.05), 3, Label::kOccupied);
+  t.create_coarse({1, 0, 0}, Label::kEmpty);
+  const auto before = octant_map(t);
+  const std::size_t nodes = t.size();
+  octomap::AbstractOccupancyOcTree& abstract = t;
+  octomap::OccupancyOcTreeBase<SemiOcTreeNode>& base = t;
+  const octomap::point3d inside(0.95f, 0.05f, 0.05f), outside(5.0f, 5.0f, 0.5f);
+  const octomap::OcTreeKey key = key_at(t, 0.95, 0.05, 0.05);
+  EXPECT_THROW(abstract.updateNode(inside, true), std::logic_error);
+  EXPECT_THROW(abstract.updateNode(key, 0.85f), std::logic_error);
+  EXPECT_THROW(abstract.updateNode(key, false), std::logic_error);
+  EXPECT_THROW(abstract.updateNode(inside, -0.4f), std::logic_error);
+  EXPECT_THROW(base.updateNode(5.0, 5.0, 0.5, true), std::logic_error);
+  EXPECT_THROW(base.updateNode(5.0, 5.0, 0.5, 0.85f), std::logic_error);
+  EXPECT_THROW(base.setNodeValue(key, 3.5f), std::logic_error);
+  EXPECT_THROW(base.setNodeValue(inside, 3.5f), std::logic_error);
+  EXPECT_THROW(base.setNodeValue(0.95, 0.05, 0.05, 3.5f), std::logic_error);
+  octomap::Pointcloud cloud;
+  cloud.push_back(outside);
+  EXPECT_THROW(base.insertPointCloud(cloud, inside), std::logic_error);
+  EXPECT_THROW(base.insertPointCloud(cloud, inside, octomap::pose6d()), std::logic_error);
+  EXPECT_THROW(base.insertPointCloud(
+                   octomap::ScanNode(new octomap::Pointcloud(cloud), octomap::pose6d(), 0)),
+               std::logic_error);
+  EXPECT_THROW(base.insertPointCloudRays(cloud, inside), std::logic_error);
+  EXPECT_THROW(base.insertRay(inside, outside), std::logic_error);
+  EXPECT_EQ(t.size(), nodes);
+  EXPECT_EQ(octant_map(t), before);
+  expect_index_agrees(t, before);
+
+  // A .bt holds occupancy only: OctoMap's reader clears the tree before the
+  // data, so the tree ends up empty, and consistent.
+  octomap::OcTree plain(0.1);
+  plain.updateNode(outside, true);
+  std::stringstream bt;
+  ASSERT_TRUE(plain.writeBinary(bt));
+  try {
+    const bool read = abstract.readBinary(bt);
+    ADD_FAILURE() << "readBinary returned " << read << " instead of throwing";
+  } catch (const std::logic_error&) {
+  }
+  EXPECT_EQ(t.size(), t.calcNumNodes());
+  expect_index_agrees(t, octant_map(t));
+  EXPECT_FALSE(t.find_octant(Point3(5.0, 5.0, 0.5)));
 }
 
 }  // namespace

@@ -399,6 +399,65 @@ std::size_t SemiOcTree::memory_bytes() const {
   return memoryUsage() + coarse_.memory_bytes();
 }
 
+namespace {
+
+[[noreturn]] void refuse(const char* what) {
+  throw std::logic_error(std::string("SemiOcTree: OctoMap's ") + what +
+                         " is not supported: labels are the map and coarse voxels are indexed; "
+                         "edit it with set_label (see semioctree.h)");
+}
+
+}  // namespace
+
+SemiOcTreeNode* SemiOcTree::updateNode(const octomap::OcTreeKey&, float, bool) {
+  refuse("updateNode");
+}
+SemiOcTreeNode* SemiOcTree::updateNode(const octomap::point3d&, float, bool) {
+  refuse("updateNode");
+}
+SemiOcTreeNode* SemiOcTree::updateNode(double, double, double, float, bool) {
+  refuse("updateNode");
+}
+SemiOcTreeNode* SemiOcTree::updateNode(const octomap::OcTreeKey&, bool, bool) {
+  refuse("updateNode");
+}
+SemiOcTreeNode* SemiOcTree::updateNode(const octomap::point3d&, bool, bool) {
+  refuse("updateNode");
+}
+SemiOcTreeNode* SemiOcTree::updateNode(double, double, double, bool, bool) {
+  refuse("updateNode");
+}
+SemiOcTreeNode* SemiOcTree::setNodeValue(const octomap::OcTreeKey&, float, bool) {
+  refuse("setNodeValue");
+}
+SemiOcTreeNode* SemiOcTree::setNodeValue(const octomap::point3d&, float, bool) {
+  refuse("setNodeValue");
+}
+SemiOcTreeNode* SemiOcTree::setNodeValue(double, double, double, float, bool) {
+  refuse("setNodeValue");
+}
+void SemiOcTree::insertPointCloud(const octomap::Pointcloud&, const octomap::point3d&, double, bool,
+                                  bool) {
+  refuse("insertPointCloud");
+}
+void SemiOcTree::insertPointCloud(const octomap::Pointcloud&, const octomap::point3d&,
+                                  const octomap::pose6d&, double, bool, bool) {
+  refuse("insertPointCloud");
+}
+void SemiOcTree::insertPointCloud(const octomap::ScanNode&, double, bool, bool) {
+  refuse("insertPointCloud");
+}
+void SemiOcTree::insertPointCloudRays(const octomap::Pointcloud&, const octomap::point3d&, double,
+                                      bool) {
+  refuse("insertPointCloudRays");
+}
+bool SemiOcTree::insertRay(const octomap::point3d&, const octomap::point3d&, double, bool) {
+  refuse("insertRay");
+}
+std::istream& SemiOcTree::readBinaryData(std::istream&) {
+  refuse("readBinary (a .bt file holds occupancy only; import it, see import.h)");
+}
+
 bool SemiOcTree::isNodeCollapsible(const SemiOcTreeNode* node) const {
   if (!nodeChildExists(node, 0)) return false;
   const SemiOcTreeNode* first = getNodeChild(node, 0);

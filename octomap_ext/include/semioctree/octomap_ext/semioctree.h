@@ -190,6 +190,55 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
   // marks stale until the next call; splitting an unmarked leaf keeps them valid.
   void mark_subtrees(std::uint32_t labels);
 
+  // --- OctoMap's occupancy updates: refused -----------------------------------
+  // Here the labels are the map and the coarse voxels are indexed. OctoMap's
+  // log-odds updates would change values under unchanged labels, or create
+  // coarse voxels the index never hears of, so a map would read back
+  // differently from what the updates said. They throw std::logic_error, also
+  // through a base-class reference; edit the map with set_label / split.
+  // readBinary (a .bt holds occupancy only) throws from readBinaryData after
+  // OctoMap's reader has cleared the tree: it is left empty. To make a
+  // SemiOcTree from an OctoMap map, see import.h.
+  SemiOcTreeNode* updateNode(const octomap::OcTreeKey& key, float log_odds_update,
+                             bool lazy_eval = false) override;
+  SemiOcTreeNode* updateNode(const octomap::point3d& value, float log_odds_update,
+                             bool lazy_eval = false) override;
+  SemiOcTreeNode* updateNode(double x, double y, double z, float log_odds_update,
+                             bool lazy_eval = false) override;
+  SemiOcTreeNode* updateNode(const octomap::OcTreeKey& key, bool occupied,
+                             bool lazy_eval = false) override;
+  SemiOcTreeNode* updateNode(const octomap::point3d& value, bool occupied,
+                             bool lazy_eval = false) override;
+  SemiOcTreeNode* updateNode(double x, double y, double z, bool occupied,
+                             bool lazy_eval = false) override;
+  SemiOcTreeNode* setNodeValue(const octomap::OcTreeKey& key, float log_odds_value,
+                               bool lazy_eval = false) override;
+  SemiOcTreeNode* setNodeValue(const octomap::point3d& value, float log_odds_value,
+                               bool lazy_eval = false) override;
+  SemiOcTreeNode* setNodeValue(double x, double y, double z, float log_odds_value,
+                               bool lazy_eval = false) override;
+  void insertPointCloud(const octomap::Pointcloud& scan, const octomap::point3d& sensor_origin,
+                        double maxrange = -1., bool lazy_eval = false,
+                        bool discretize = false) override;
+  void insertPointCloud(const octomap::Pointcloud& scan, const octomap::point3d& sensor_origin,
+                        const octomap::pose6d& frame_origin, double maxrange = -1.,
+                        bool lazy_eval = false, bool discretize = false) override;
+  void insertPointCloud(const octomap::ScanNode& scan, double maxrange = -1.,
+                        bool lazy_eval = false, bool discretize = false) override;
+  void insertPointCloudRays(const octomap::Pointcloud& scan, const octomap::point3d& sensor_origin,
+                            double maxrange = -1., bool lazy_eval = false) override;
+  bool insertRay(const octomap::point3d& origin, const octomap::point3d& end,
+                 double maxrange = -1.0, bool lazy_eval = false) override;
+  std::istream& readBinaryData(std::istream& s) override;
+  // Not virtual in OctoMap, so hidden here: deleteNode would free indexed
+  // coarse voxels (use set_label(key, level, Label::kUnknown) to forget an
+  // octant), swapContent would leave both trees' indexes stale.
+  bool deleteNode(double x, double y, double z, unsigned int depth = 0) = delete;
+  bool deleteNode(const octomap::point3d& value, unsigned int depth = 0) = delete;
+  bool deleteNode(const octomap::OcTreeKey& key, unsigned int depth = 0) = delete;
+  void swapContent(octomap::OcTreeBaseImpl<SemiOcTreeNode, octomap::AbstractOccupancyOcTree>&) =
+      delete;
+
   // --- file format ------------------------------------------------------------
   // .ot payload: a small header (magic, coarse level, exact resolution, node
   // count, byte count, FNV-1a hash) and OctoMap's node stream. readData throws
