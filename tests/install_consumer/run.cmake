@@ -1,6 +1,8 @@
 # ctest script: install the build into a temporary prefix, configure and build
-# tests/install_consumer against it with find_package(semioctree), run it; build
-# examples/ on its own against the same prefix.
+# tests/install_consumer against it with find_package(semioctree), run it; the
+# same with the octomap_ext component only while the pipeline's dependencies
+# cannot be found; an unknown component must fail; build examples/ on its own
+# against the same prefix.
 # Variables: BUILD_DIR, SOURCE_DIR, WORK_DIR.
 
 # Runs a command; on failure stops with `what`, the exit code and the command's output.
@@ -12,10 +14,11 @@ function(run_step what)
   set(step_output "${out}" PARENT_SCOPE)
 endfunction()
 
-# Configures and builds the project in `source` against the installed prefix.
+# Configures and builds the project in `source` against the installed prefix;
+# further arguments go to the configure step.
 function(build_against_prefix what source binary)
   run_step("configuring ${what}" ${CMAKE_COMMAND} -S ${source} -B ${binary}
-           -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=Release)
+           -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=Release ${ARGN})
   run_step("building ${what}" ${CMAKE_COMMAND} --build ${binary})
 endfunction()
 
@@ -26,4 +29,24 @@ run_step("the consumer" ${WORK_DIR}/build/consumer ${WORK_DIR}/tree.ot)
 message(STATUS "${step_output}")
 run_step("the reader (OctoMap's factory only)" ${WORK_DIR}/build/reader ${WORK_DIR}/tree.ot)
 message(STATUS "${step_output}")
+# The OctoMap extension alone must not need the pipeline's dependencies.
+build_against_prefix("the reader with the octomap_ext component only"
+                     ${SOURCE_DIR}/tests/install_consumer ${WORK_DIR}/build-octomap-ext
+                     -DONLY_OCTOMAP_EXT=ON -DCMAKE_DISABLE_FIND_PACKAGE_PCL=ON
+                     -DCMAKE_DISABLE_FIND_PACKAGE_Eigen3=ON
+                     -DCMAKE_DISABLE_FIND_PACKAGE_dynamicEDT3D=ON
+                     -DCMAKE_DISABLE_FIND_PACKAGE_nlohmann_json=ON -DCMAKE_DISABLE_FIND_PACKAGE_PNG=ON)
+run_step("the reader (octomap_ext component only)" ${WORK_DIR}/build-octomap-ext/reader
+         ${WORK_DIR}/tree.ot)
+message(STATUS "${step_output}")
+# An unknown component: configuring fails and says which components there are.
+file(WRITE ${WORK_DIR}/bogus/CMakeLists.txt
+     "cmake_minimum_required(VERSION 3.16)\nproject(bogus NONE)\n"
+     "find_package(semioctree REQUIRED COMPONENTS octomap_ext bogus)\n")
+execute_process(COMMAND ${CMAKE_COMMAND} -S ${WORK_DIR}/bogus -B ${WORK_DIR}/bogus/build
+                        -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(rc EQUAL 0 OR NOT err MATCHES "no component 'bogus' \\(it has octomap_ext and pipeline\\)")
+  message(FATAL_ERROR "an unknown component was not refused clearly (${rc}):\n${out}\n${err}")
+endif()
 build_against_prefix("examples/ on its own" ${SOURCE_DIR}/examples ${WORK_DIR}/examples)
