@@ -34,8 +34,10 @@ struct SurveyOptions {
   int max_scans = 10;
   bool homogeneous = false;
   std::uint64_t seed = 1;
-  std::string policy = "nbv";  // or "random": a random feasible candidate (the baseline)
-  std::vector<double> start;   // X,Y: replaces the scene's robot start
+  // "random": a random feasible candidate (the baseline); "oracle": the feasible
+  // candidate that adds the most surface, known from the scene (the yardstick).
+  std::string policy = "nbv";
+  std::vector<double> start;  // X,Y: replaces the scene's robot start
   std::string cache;
   bool skip_coverage = false;
 };
@@ -49,6 +51,50 @@ constexpr std::size_t kMissedPartsListed = 8;
 
 nlohmann::json true_pose_json(const sim::Scan& s) {
   return pose_json(s.sensor_to_world());
+}
+
+struct OracleChoice {
+  Point3 position;          // survey frame
+  double gain_percent = 0;  // reference samples it newly covers, % of the reference
+};
+
+// --policy oracle: scans every feasible candidate in the simulator and takes the
+// one whose points cover the most reference samples not covered yet. Perfect
+// knowledge, one scan ahead, among the planner's own candidates: what the best
+// greedy score could choose, for comparison with the NBV score.
+OracleChoice oracle_choice(const std::vector<NbvCandidate>& candidates, const sim::Scene& scene,
+                           const sim::RayCaster& caster, const sim::CoverageReference& ref,
+                           const std::vector<Eigen::Vector3f>& measured,
+                           const Eigen::Isometry3d& survey_to_world, double yaw_deg,
+                           std::uint64_t seed, unsigned threads) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<bool> have = sim::covered_samples(ref, measured);
+  OracleChoice best;
+  std::size_t best_gain = 0;
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    const Point3& p = candidates[c].position;
+    const Eigen::Vector3d w = survey_to_world * Eigen::Vector3d(p.x, p.y, 0.0);
+    sim::ScanOptions so;
+    so.seed = seed;
+    so.threads = threads;
+    so.with_intensity = false;
+    const sim::Scan s = sim::scan(caster, scene.scanner, {w.x(), w.y(), yaw_deg}, so);
+    const Eigen::Affine3f to_world = s.sensor_to_world().cast<float>();
+    std::vector<Eigen::Vector3f> points;
+    points.reserve(s.points.size());
+    for (const Eigen::Vector3f& q : s.points) points.push_back(to_world * q);
+    const std::vector<bool> got = sim::covered_samples(ref, points);
+    std::size_t gain = 0;
+    for (std::size_t k = 0; k < got.size(); ++k) gain += got[k] && !have[k];
+    if (c == 0 || gain > best_gain) best_gain = gain, best.position = p;
+    if ((c + 1) % 20 == 0 || c + 1 == candidates.size()) {
+      std::printf("  oracle: scanned %zu of %zu candidates [%.1f s]\n", c + 1, candidates.size(),
+                  since(t0));
+      std::fflush(stdout);
+    }
+  }
+  best.gain_percent = have.empty() ? 0.0 : 100.0 * double(best_gain) / double(have.size());
+  return best;
 }
 
 void run_survey(const SurveyOptions& o) {
@@ -87,6 +133,14 @@ void run_survey(const SurveyOptions& o) {
                 o.plan.leaf);
   std::filesystem::create_directories(o.out);
 
+  if (o.policy == "oracle" && o.skip_coverage)
+    throw std::invalid_argument("--policy oracle chooses by coverage: drop --no-coverage");
+  const std::string cache = o.cache.empty() ? sim::default_cache_dir() : o.cache;
+  std::optional<sim::CoverageReference> reference;  // loaded once, when first needed
+  auto coverage_reference = [&]() -> const sim::CoverageReference& {
+    if (!reference) reference = sim::load_or_compute_coverage_reference(truth, cache);
+    return *reference;
+  };
   const auto caster = sim::make_ray_caster(sim::tessellate(scene));
   sim::Robot robot(scene.robot, o.seed);
   std::mt19937_64 choice(o.seed);  // --policy random
@@ -199,14 +253,24 @@ void run_survey(const SurveyOptions& o) {
     // Drive to the NBV (the survey frame mapped to the world through the first
     // scan), or, as the baseline, to a random feasible candidate.
     Point3 next = r.nbv->position;
+    const char* what = "NBV";
     if (o.policy == "random") {
       std::uniform_int_distribution<std::size_t> pick(0, r.candidates.size() - 1);
       next = r.candidates[pick(choice)].position;
+      what = "random candidate";
+    } else if (o.policy == "oracle") {
+      const OracleChoice best = oracle_choice(r.candidates, scene, *caster, coverage_reference(),
+                                              measured, survey_to_world, robot.true_pose().yaw_deg,
+                                              o.seed * 1000 + 999, o.plan.threads);
+      next = best.position;
+      what = "oracle's choice";
+      session.last_record()["oracle_gain_percent"] = best.gain_percent;
+      std::printf("  oracle: (%.3f, %.3f) adds %.2f %% of the reference surface\n", next.x, next.y,
+                  best.gain_percent);
     }
     const Eigen::Vector3d target = survey_to_world * Eigen::Vector3d(next.x, next.y, 0.0);
     robot.move_to({target.x(), target.y(), robot.true_pose().yaw_deg});
-    std::printf("move to the %s (%.3f, %.3f): %.2f m driven so far\n",
-                o.policy == "random" ? "random candidate" : "NBV", target.x(), target.y(),
+    std::printf("move to the %s (%.3f, %.3f): %.2f m driven so far\n", what, target.x(), target.y(),
                 robot.distance_driven());
     std::fflush(stdout);
   }
@@ -219,8 +283,7 @@ void run_survey(const SurveyOptions& o) {
   extra["distance_driven_m"] = robot.distance_driven();
   if (!o.skip_coverage) {
     const auto t0 = std::chrono::steady_clock::now();
-    const std::string cache = o.cache.empty() ? sim::default_cache_dir() : o.cache;
-    const sim::CoverageReference ref = sim::load_or_compute_coverage_reference(truth, cache);
+    const sim::CoverageReference& ref = coverage_reference();
     const std::vector<bool> covered = sim::covered_samples(ref, measured);
     const sim::Coverage c = sim::count_covered(covered);
     const sim::MissedSamples missed =
@@ -292,9 +355,12 @@ void add_survey_command(CLI::App& app) {
       ->check(seed_value())
       ->capture_default_str();
   cmd->add_option("--policy", o->policy,
-                  "where to scan next: nbv (the best candidate) or random (a random feasible "
-                  "candidate: the baseline the NBV is compared with)")
-      ->check(CLI::IsMember({"nbv", "random"}))
+                  "where to scan next: nbv (the best candidate), random (a random feasible "
+                  "candidate: the baseline the NBV is compared with) or oracle (the feasible "
+                  "candidate whose scan adds the most reference surface, found by scanning "
+                  "each one in the simulator: perfect knowledge, a yardstick for the NBV "
+                  "score; about a minute per scan on the lab)")
+      ->check(CLI::IsMember({"nbv", "random", "oracle"}))
       ->capture_default_str();
   cmd->add_option("--start", o->start, "robot start X,Y in the scene (default: the scene's)")
       ->delimiter(',')
