@@ -85,10 +85,20 @@ Label label_for(Visibility v) {
   }
 }
 
+// The label a study gives an octant seen so: for kFreeThroughOpenings only
+// the view through an opening changes anything (the map says the rest is free).
+Label label_for(Visibility v, OcclusionScope scope) {
+  if (scope == OcclusionScope::kFreeThroughOpenings)
+    return v == Visibility::kThroughOpening ? Label::kOut : Label::kEmpty;
+  return label_for(v);
+}
+
 bool candidate(Label l, OcclusionScope scope) {
   switch (scope) {
     case OcclusionScope::kUnknown:
       return l == Label::kUnknown;
+    case OcclusionScope::kFreeThroughOpenings:
+      return l == Label::kEmpty;
     case OcclusionScope::kNewViews:
       return l == Label::kOccluded || l == Label::kOut;
     default:
@@ -219,15 +229,16 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
       const Candidate& o = todo[c];
       const std::uint32_t* id = &samples[9 * c];
       const auto known = std::uint8_t(known_visibility(o.node->label(), params.scope));
-      const std::uint8_t first = std::max(known, visibility[id[0]]);
+      auto verdict = [&](std::uint32_t sample) {
+        return label_for(Visibility(std::max(known, visibility[sample])), params.scope);
+      };
+      const Label l = verdict(id[0]);
       bool uniform = true;
       if (o.level < leaf)
-        for (int i = 1; i < 9 && uniform; ++i)
-          uniform = std::max(known, visibility[id[i]]) == first;
+        for (int i = 1; i < 9 && uniform; ++i) uniform = verdict(id[i]) == l;
       ++report.octants_tested;
       if (uniform) {
         // A leaf of the tree: relabel in place.
-        const Label l = label_for(Visibility(first));
         o.node->set_label(l);
         o.node->setLogOdds(tree.log_odds_for(l));
         report.empty += l == Label::kEmpty;

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <random>
 #include <set>
@@ -400,6 +401,43 @@ std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceili
     remaining = rest;
   }
   return result;
+}
+
+std::optional<double> map_ceiling_height(const SemiOcTree& tree, double min_height) {
+  const double r = tree.leaf_size();
+  std::map<std::int64_t, std::size_t> per_layer;  // leaf layer (z key) → occupied leaves
+  tree.for_each_octant([&](const Octant& o) {
+    if (o.label() == Label::kOccupied) ++per_layer[std::int64_t(o.key.k[2]) - 32768];
+  });
+  auto centre_of = [r](std::int64_t layer) { return (double(layer) + 0.5) * r; };
+  std::size_t floor = 0;
+  for (const auto& [layer, n] : per_layer)
+    if (std::abs(centre_of(layer)) < r) floor = std::max(floor, n);
+  std::optional<double> best;
+  std::size_t most = 0;
+  for (const auto& [layer, n] : per_layer)
+    if (centre_of(layer) > min_height && n > most) most = n, best = centre_of(layer);
+  if (floor == 0 || 4 * most < floor) return std::nullopt;
+  return best;
+}
+
+std::vector<DetectedOpening> detect_openings_in_map(const SemiOcTree& tree, double ceiling_height,
+                                                    const std::vector<Point3>& scanner_positions,
+                                                    const OpeningParams& params,
+                                                    OpeningsReport* report) {
+  const double r = tree.leaf_size();
+  Cloud centres;
+  tree.for_each_octant([&](const Octant& o) {
+    if (o.label() != Label::kOccupied) return;
+    const Point3& c = o.center;
+    if (c.z > r && c.z < ceiling_height - r)
+      centres.push_back(pcl::PointXYZ{float(c.x), float(c.y), float(c.z)});
+  });
+  // A surface near a leaf boundary leaves two layers of occupied leaves, whose
+  // centres lie a leaf apart: one wall, not two parallel ones.
+  OpeningParams p = params;
+  p.ransac_distance = std::max(p.ransac_distance, 1.01 * r);
+  return detect_openings(centres, ceiling_height, tree, scanner_positions, p, report);
 }
 
 std::size_t label_openings(SemiOcTree& tree, const std::vector<DetectedOpening>& openings) {

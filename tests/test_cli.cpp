@@ -212,6 +212,7 @@ TEST(Cli, MapNbvTakesAnOctomapMapOrASemioctree) {
   // Under the table (x 5–6.6, y 1–1.8 above the floor) is hidden from the scanner.
   EXPECT_GT(j["octants"]["by_label"]["occluded"].get<int>(), 0);
   EXPECT_GT(j["stop_percent"].get<double>(), 0.0);
+  EXPECT_EQ(j["openings"], 0) << r.all();  // looked for (a ceiling at 3 m), none in this room
   const double nx = j["nbv"]["x"], ny = j["nbv"]["y"];
   EXPECT_TRUE(nx > 0.5 && nx < 7.5 && ny > 0.5 && ny < 5.5) << nx << ", " << ny;
   EXPECT_DOUBLE_EQ(j["nbv"]["z"].get<double>(), 1.5);
@@ -248,6 +249,63 @@ TEST(Cli, MapNbvTakesAnOctomapMapOrASemioctree) {
                                " --scanner 3,2.5,1.5 --out " + (dir / "x").string());
   EXPECT_EQ(color.exit_code, 1);
   EXPECT_NE(color.all().find("holds no occupancy"), std::string::npos) << color.all();
+}
+
+// map-nbv finds the doors and the window of the lab in an OctoMap map made from
+// the start (the simulated scan, inserted with OctoMap's insertPointCloud), and
+// the free space seen through them is out of the room.
+TEST(Cli, MapNbvFindsDoorsAndWindowsInAnOctomapMap) {
+  const auto dir = testing::temp_dir("cli-map-nbv-lab");
+  const std::string pcd = (dir / "scan.pcd").string();
+  const CliRun scan = run_cli("scan --scene " + std::string(SEMIOCTREE_SOURCE_DIR) +
+                              "/sim/scenes/lab.scene.json --at 5.2,3.6 --out " + pcd);
+  ASSERT_EQ(scan.exit_code, 0) << scan.all();
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  ASSERT_EQ(pcl::io::loadPCDFile(pcd, cloud), 0);
+  const Eigen::Vector3f origin = cloud.sensor_origin_.head<3>();
+  ASSERT_NEAR(origin.x(), 5.2f, 1e-5f);
+  octomap::Pointcloud points;
+  for (const auto& p : cloud) {
+    const Eigen::Vector3f w = cloud.sensor_orientation_ * p.getVector3fMap() + origin;
+    points.push_back(w.x(), w.y(), w.z());
+  }
+  octomap::OcTree map(0.05);
+  map.insertPointCloud(points, octomap::point3d(origin.x(), origin.y(), origin.z()), -1.0, false,
+                       true);
+  const std::string bt = (dir / "lab.bt").string();
+  ASSERT_TRUE(map.writeBinary(bt));
+
+  const CliRun r =
+      run_cli("map-nbv --map " + bt + " --scanner 5.2,3.6,1.5 --out " + (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.all();
+  std::ifstream in(dir / "out" / "nbv.json");
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["openings"], 4) << r.all();  // three doors and the window
+  std::ifstream oin(dir / "out" / "openings.json");
+  const auto openings = nlohmann::json::parse(oin);
+  ASSERT_TRUE(openings.contains("openings")) << openings.dump();
+  int doors = 0, windows = 0;
+  for (const auto& op : openings["openings"]) (op["kind"] == "door" ? doors : windows)++;
+  EXPECT_EQ(doors, 3);
+  EXPECT_EQ(windows, 1);
+  const auto tree = read_semioctree_file((dir / "out" / "semioctree.ot").string());
+  // Room A behind door 2 (y 2.5–3.4 on the wall x = 10.5), in view through it
+  // from the start: the OctoMap map holds it as free, and it is out of the room now.
+  const Point3 room_a(11.5, 2.85, 1.2);
+  EXPECT_EQ(tree->find_octant(room_a)->label(), Label::kOut) << r.all();
+  // The room itself stays empty.
+  EXPECT_EQ(tree->find_octant(Point3(5.2, 5.0, 1.5))->label(), Label::kEmpty);
+  EXPECT_GT(j["volume_percent"]["out"].get<double>(), 0.0);
+
+  // Without the doors and windows (the old behaviour), the corridor counts as the room.
+  const CliRun plain = run_cli("map-nbv --map " + bt + " --scanner 5.2,3.6,1.5 --no-openings " +
+                               "--out " + (dir / "plain").string());
+  ASSERT_EQ(plain.exit_code, 0) << plain.all();
+  std::ifstream pin(dir / "plain" / "nbv.json");
+  EXPECT_TRUE(nlohmann::json::parse(pin)["openings"].is_null());
+  const auto plain_tree = read_semioctree_file((dir / "plain" / "semioctree.ot").string());
+  EXPECT_EQ(plain_tree->find_octant(room_a)->label(), Label::kEmpty);
+  EXPECT_FALSE(fs::exists(dir / "plain" / "openings.json"));
 }
 
 TEST(Cli, CompareWritesTablesAndChart) {

@@ -4,9 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <random>
 #include <set>
 #include <tuple>
+#include <vector>
 
 #include "semioctree/discretize.h"
 #include "semioctree/occlusion.h"
@@ -23,6 +25,28 @@ using testing::room_with_pillar;
 Label label_at(const SemiOcTree& t, const Point3& p) {
   const auto o = t.find_octant(p);
   return o ? o->label() : Label::kUnknown;
+}
+
+// The occupancy of a wall at x = 2 (y 0–4, up to 2.4 m) with a hole 1 m wide
+// and 2 m high at y 1.5–2.5.
+std::unique_ptr<SemiOcTree> wall_with_door() {
+  Cloud c;
+  for (double y = 0; y < 4; y += 0.02)
+    for (double z = 0.02; z < 2.4; z += 0.02)
+      if (!(y >= 1.5 && y < 2.5 && z < 2.0)) c.push_back(pcl::PointXYZ{2.01f, float(y), float(z)});
+  c.push_back(pcl::PointXYZ{0.01f, 0.01f, 0.01f});
+  c.push_back(pcl::PointXYZ{3.99f, 3.99f, 0.01f});
+  return discretize(c, 2.4, {0.05, 0.8});
+}
+
+// Labels the hole's leaves in the wall plane door (as the openings stage does).
+void label_door(SemiOcTree& tree) {
+  for (double y = 1.525; y < 2.5; y += 0.05)
+    for (double z = 0.025; z < 2.0; z += 0.05) {
+      octomap::OcTreeKey k;
+      tree.key_of({2.025, y, z}, k);
+      tree.set_label(k, tree.coarse_level(), Label::kDoor);
+    }
 }
 
 TEST(Occlusion, ScannerViewsCarryTheLimitsToEveryPosition) {
@@ -139,20 +163,8 @@ TEST(Occlusion, SecondScannerUnoccludesWhatItSees) {
 
 TEST(Occlusion, SpaceSeenThroughADoorIsOut) {
   // Wall at x = 2 with a door 1 m wide, 2 m high; the scanner on one side.
-  Cloud c;
-  for (double y = 0; y < 4; y += 0.02)
-    for (double z = 0.02; z < 2.4; z += 0.02)
-      if (!(y >= 1.5 && y < 2.5 && z < 2.0)) c.push_back(pcl::PointXYZ{2.01f, float(y), float(z)});
-  c.push_back(pcl::PointXYZ{0.01f, 0.01f, 0.01f});
-  c.push_back(pcl::PointXYZ{3.99f, 3.99f, 0.01f});
-  const auto tree = discretize(c, 2.4, {0.05, 0.8});
-  // Label the door's leaves in the wall plane (as the openings stage does).
-  for (double y = 1.525; y < 2.5; y += 0.05)
-    for (double z = 0.025; z < 2.0; z += 0.05) {
-      octomap::OcTreeKey k;
-      tree->key_of({2.025, y, z}, k);
-      tree->set_label(k, tree->coarse_level(), Label::kDoor);
-    }
+  const auto tree = wall_with_door();
+  label_door(*tree);
   study_occlusion(*tree, {ScannerView{Point3(1.0, 2.0, 1.2)}});
   EXPECT_EQ(label_at(*tree, Point3(3.0, 2.0, 1.0)), Label::kOut);       // straight through the door
   EXPECT_EQ(label_at(*tree, Point3(3.0, 0.3, 1.0)), Label::kOccluded);  // behind the wall
@@ -191,6 +203,30 @@ TEST(Occlusion, SpaceSeenThroughADoorIsOut) {
   EXPECT_EQ(label_at(*tree, far_out), Label::kOut);                     // out of its range
   EXPECT_EQ(label_at(*tree, near_wall), Label::kEmpty);                 // not re-tested
   EXPECT_GT(rep.octants_tested, 0u);
+}
+
+TEST(Occlusion, FreeSpaceSeenThroughADoorBecomesOut) {
+  // The same wall and door, in a map whose free space was known beforehand
+  // (an imported OctoMap map): everything not occupied is empty.
+  const auto tree = wall_with_door();
+  std::vector<Octant> space;
+  tree->for_each_octant([&](const Octant& o) {
+    if (o.label() != Label::kOccupied) space.push_back(o);
+  });
+  for (const Octant& o : space) tree->set_label(o.key, o.level, Label::kEmpty);
+  const ScannerView here{Point3(1.0, 2.0, 1.2)};
+  label_door(*tree);
+  OcclusionParams through;
+  through.scope = OcclusionScope::kFreeThroughOpenings;
+  const OcclusionReport rep = study_occlusion(*tree, {here}, through);
+  EXPECT_GT(rep.out, 0u);
+  EXPECT_EQ(rep.occluded, 0u);
+  EXPECT_EQ(label_at(*tree, Point3(3.0, 2.0, 1.0)), Label::kOut);    // through the door
+  EXPECT_EQ(label_at(*tree, Point3(3.6, 2.6, 1.0)), Label::kOut);    // through the door, farther
+  EXPECT_EQ(label_at(*tree, Point3(3.0, 0.3, 1.0)), Label::kEmpty);  // hidden: the map says free
+  EXPECT_EQ(label_at(*tree, Point3(1.0, 0.5, 1.0)), Label::kEmpty);  // this side, seen directly
+  EXPECT_EQ(label_at(*tree, Point3(2.025, 2.0, 1.0)), Label::kDoor);
+  EXPECT_EQ(label_at(*tree, Point3(2.025, 0.5, 1.0)), Label::kOccupied);
 }
 
 TEST(Occlusion, RangeAndElevationLimits) {

@@ -8,9 +8,11 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <optional>
 #include <random>
 
 #include "semioctree/discretize.h"
+#include "semioctree/octomap_ext/import.h"
 #include "semioctree/openings.h"
 #include "semioctree/preprocess.h"
 #include "semioctree/sim/geometry.h"
@@ -76,6 +78,20 @@ double iou(const Rect2& a, const Rect2& b) {
 
 Vec3 centre(const DetectedOpening& o) {
   return 0.25 * (o.corners[0] + o.corners[1] + o.corners[2] + o.corners[3]);
+}
+
+// IoU of a detected opening with a ground-truth one in the latter's wall plane
+// (`to_frame`: world → the detection's frame); 0 for another kind or wall.
+double match_iou(const DetectedOpening& d, const sim::OpeningRect& g,
+                 const Eigen::Isometry3d& to_frame) {
+  const bool same_kind = (d.kind == OpeningKind::kDoor) == (g.kind == sim::OpeningKind::door);
+  if (!same_kind || std::abs(d.wall_normal.dot(g.normal)) < 0.95) return 0.0;
+  std::array<Vec3, 4> gl;
+  for (int k = 0; k < 4; ++k) gl[k] = to_frame * g.corners[k];
+  const Vec3 gc = 0.25 * (gl[0] + gl[1] + gl[2] + gl[3]);
+  if (std::abs((centre(d) - gc).dot(g.normal)) > 0.3) return 0.0;  // another wall
+  const Vec3 u = (gl[1] - gl[0]).normalized();
+  return iou(rect_along(d.corners, u), rect_along(gl, u));
 }
 
 TEST(Openings, FindsDoorAndWindowWithTheirSizes) {
@@ -231,16 +247,8 @@ TEST(Openings, LabSceneFromStartMatchesGroundTruth) {
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-    // Best IoU in the wall plane of the ground truth, same kind, same wall.
     auto match = [&](const DetectedOpening& d, const sim::OpeningRect& g) {
-      const bool same_kind = (d.kind == OpeningKind::kDoor) == (g.kind == sim::OpeningKind::door);
-      if (!same_kind || std::abs(d.wall_normal.dot(g.normal)) < 0.95) return 0.0;
-      std::array<Vec3, 4> gl;
-      for (int k = 0; k < 4; ++k) gl[k] = pre.transform * g.corners[k];
-      const Vec3 gc = 0.25 * (gl[0] + gl[1] + gl[2] + gl[3]);
-      if (std::abs((centre(d) - gc).dot(g.normal)) > 0.3) return 0.0;  // another wall
-      const Vec3 u = (gl[1] - gl[0]).normalized();
-      return iou(rect_along(d.corners, u), rect_along(gl, u));
+      return match_iou(d, g, pre.transform);
     };
     LabRun run;
     std::printf(
@@ -292,6 +300,63 @@ TEST(Openings, LabSceneFromStartMatchesGroundTruth) {
       std::printf("  paper rule only: %zu openings\n", strict.size());
     }
   }
+}
+
+// The way in for OctoMap users: the lab mapped by OctoMap itself from the start
+// (insertPointCloud, as octomap_server does), imported, its ceiling found and
+// its doors and window detected in the map alone, without points.
+TEST(Openings, OccupancyMapOfTheLabFromItsStart) {
+  const sim::Scene scene =
+      sim::load_scene(std::string(SEMIOCTREE_SOURCE_DIR) + "/sim/scenes/lab.scene.json");
+  const sim::GroundTruth truth(scene);
+  const sim::Pose2 start{scene.robot.start.x(), scene.robot.start.y(), scene.robot.start_yaw_deg};
+  sim::ScanOptions so;
+  so.seed = 1;
+  so.with_intensity = false;
+  const sim::Scan s = sim::scan(truth.ray_caster(), scene.scanner, start, so);
+  const Eigen::Isometry3d to_world = s.sensor_to_world();
+  octomap::Pointcloud points;
+  points.reserve(s.points.size());
+  for (const auto& p : s.points) {
+    const Vec3 w = to_world * p.cast<double>();
+    points.push_back(float(w.x()), float(w.y()), float(w.z()));
+  }
+  const Vec3 o = s.origin();
+  const auto t0 = std::chrono::steady_clock::now();
+  octomap::OcTree map(0.05);
+  map.insertPointCloud(points, octomap::point3d(float(o.x()), float(o.y()), float(o.z())), -1.0,
+                       false, true);
+  std::printf("OctoMap insertPointCloud: %zu nodes [%.2f s]\n", map.size(),
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  const auto tree = from_occupancy_octree(map, 0.8);
+  const std::optional<double> ceiling = map_ceiling_height(*tree);
+  ASSERT_TRUE(ceiling);
+  EXPECT_NEAR(*ceiling, 3.2, 0.05);
+  OpeningsReport report;
+  const auto found =
+      detect_openings_in_map(*tree, *ceiling, {Point3(o.x(), o.y(), o.z())}, {}, &report);
+  std::printf("%zu walls, %zu candidates, %zu found, %zu rejected\n", report.walls.size(),
+              report.candidates, found.size(), report.rejected.size());
+  // All four are in view of the start (the pipeline's test above finds the same).
+  const std::vector<sim::OpeningRect> gt = truth.openings();
+  ASSERT_EQ(gt.size(), 4u);
+  const Eigen::Isometry3d world = Eigen::Isometry3d::Identity();
+  for (const sim::OpeningRect& g : gt) {
+    double best = 0;
+    for (const DetectedOpening& d : found) best = std::max(best, match_iou(d, g, world));
+    EXPECT_GE(best, 0.7) << sim::to_string(g.kind) << " of wall " << g.wall;
+  }
+  for (const DetectedOpening& d : found) {
+    double best = 0;
+    for (const sim::OpeningRect& g : gt) best = std::max(best, match_iou(d, g, world));
+    const Vec3 c = centre(d);
+    std::printf("  %s at (%.2f, %.2f, %.2f) %.2f x %.2f, sill %.2f, LOS %.2f, IoU %.3f\n",
+                to_string(d.kind), c.x(), c.y(), c.z(), d.width, d.height, d.sill, d.los_fraction,
+                best);
+    EXPECT_GE(best, 0.3) << "false positive " << to_string(d.kind) << " at (" << c.x() << ", "
+                         << c.y() << ", " << c.z() << ")";
+  }
+  EXPECT_EQ(found.size(), 4u);  // one wall each, not one per layer of leaves
 }
 
 }  // namespace

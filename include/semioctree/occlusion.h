@@ -38,6 +38,11 @@ enum class OcclusionScope : std::uint8_t {
   // view from a new position wins, so out can become empty and occluded
   // anything (DESIGN.md stage 8).
   kNewViews,
+  // Only empty octants: those seen through a door or window, and not directly,
+  // become out; the rest stay empty. For a map whose free space was known
+  // before its openings were labelled (an imported OctoMap map): what was seen
+  // through them lies outside the room.
+  kFreeThroughOpenings,
 };
 
 struct OcclusionParams {

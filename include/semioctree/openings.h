@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 #include "semioctree/octomap_ext/semioctree.h"
@@ -109,6 +110,22 @@ std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceili
                                              const std::vector<Point3>& scanner_positions,
                                              const OpeningParams& params = {},
                                              OpeningsReport* report = nullptr);
+
+// The ceiling of a map that holds no points (an OctoMap occupancy map imported
+// with from_occupancy_octree), its floor at z = 0: the centre height of the
+// layer of leaves above `min_height` holding the most occupied leaves. Nullopt
+// when the map has no floor layer (no occupied leaves within a leaf of z = 0),
+// or no layer above `min_height` holds a quarter as many as the floor's.
+std::optional<double> map_ceiling_height(const SemiOcTree& tree, double min_height = 2.0);
+
+// detect_openings for such a map: the centres of its occupied leaves stand for
+// the points, without the floor's and the ceiling's layers (as preprocess
+// removes their points). With the default cell size the wall grid's cells are
+// the map's leaves, one point each; walls take inliers within at least a leaf.
+std::vector<DetectedOpening> detect_openings_in_map(const SemiOcTree& tree, double ceiling_height,
+                                                    const std::vector<Point3>& scanner_positions,
+                                                    const OpeningParams& params = {},
+                                                    OpeningsReport* report = nullptr);
 
 // Labels the leaf octants that the hole's rectangle passes through door or
 // window; occupied leaves (the points of a jamb) keep their label. Returns the

@@ -14,10 +14,12 @@
 #include "cloud_input.h"
 #include "commands.h"
 #include "option_checks.h"
+#include "semioctree/figures.h"
 #include "semioctree/nbv.h"
 #include "semioctree/occlusion.h"
 #include "semioctree/octomap_ext/file_io.h"
 #include "semioctree/octomap_ext/import.h"
+#include "semioctree/openings.h"
 #include "semioctree/outputs.h"
 #include "semioctree/scan_io.h"
 #include "survey_session.h"
@@ -37,6 +39,8 @@ struct MapNbvOptions {
   double candidate_spacing = 0.5;
   double robot_radius = 0.5;
   double scanner_height = -1;  // < 0: the last scanner's z (the floor is z = 0)
+  bool skip_openings = false;
+  double ceiling = -1;  // < 0: map_ceiling_height
   unsigned threads = 0;
   ScannerView limits;
 };
@@ -47,6 +51,41 @@ double since(std::chrono::steady_clock::time_point t0) {
 
 nlohmann::json point_json(const Point3& p) {
   return {{"x", p.x}, {"y", p.y}, {"z", p.z}};
+}
+
+// An OctoMap map holds no doors or windows: find them as `classify` does, in
+// its occupied leaves, then make the free space seen through them out.
+std::optional<std::vector<DetectedOpening>> find_openings_in_map(
+    SemiOcTree& tree, const MapNbvOptions& o, const std::vector<Point3>& scanners) {
+  if (o.skip_openings) return std::nullopt;
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::optional<double> ceiling =
+      o.ceiling > 0 ? std::optional<double>(o.ceiling) : map_ceiling_height(tree);
+  if (!ceiling) {
+    std::printf(
+        "doors and windows: not looked for, no ceiling found (no layer of occupied leaves above "
+        "2 m holds a quarter as many as the floor at z = 0); give --ceiling\n");
+    return std::nullopt;
+  }
+  OpeningsReport rep;
+  std::vector<DetectedOpening> found = detect_openings_in_map(tree, *ceiling, scanners, {}, &rep);
+  label_openings(tree, found);
+  std::printf(
+      "doors and windows (ceiling %.2f m%s): %zu walls, %zu candidates, %zu confirmed, %zu "
+      "rejected as occlusion shadows [%.2f s]\n",
+      *ceiling, o.ceiling > 0 ? "" : ", found in the map", rep.walls.size(), rep.candidates,
+      found.size(), rep.rejected.size(), since(t0));
+  for (const DetectedOpening& d : found)
+    std::printf("  %-6s %.2f x %.2f m, sill %.2f m, line of sight %.0f %%\n", to_string(d.kind),
+                d.width, d.height, d.sill, 100 * d.los_fraction);
+  if (!found.empty()) {
+    OcclusionParams op;
+    op.scope = OcclusionScope::kFreeThroughOpenings;
+    op.threads = o.threads;
+    const OcclusionReport occ = study_occlusion(tree, scanner_views(scanners, o.limits), op);
+    std::printf("  free space seen through them is out of the room: %zu octants\n", occ.out);
+  }
+  return found;
 }
 
 void run_map_nbv(const MapNbvOptions& o) {
@@ -68,6 +107,7 @@ void run_map_nbv(const MapNbvOptions& o) {
   // The map: a SemiOcTree as it is, an OctoMap occupancy map imported.
   TreeFile file = read_tree_file(o.map);
   std::unique_ptr<SemiOcTree> tree;
+  std::optional<std::vector<DetectedOpening>> openings;  // looked for: an OctoMap map
   if (auto* semi = dynamic_cast<SemiOcTree*>(file.tree.get())) {
     file.tree.release();
     tree.reset(semi);
@@ -105,6 +145,7 @@ void run_map_nbv(const MapNbvOptions& o) {
           "occluded, %zu out [%.2f s]\n",
           views.size(), occ.empty, occ.occluded, occ.out, since(t1));
     }
+    openings = find_openings_in_map(*tree, o, scanners);
   } else {
     throw std::invalid_argument(o.map + ": a " + file.type +
                                 " holds no occupancy (give a .bt, an OcTree .ot or a SemiOcTree "
@@ -131,6 +172,8 @@ void run_map_nbv(const MapNbvOptions& o) {
               r.scoring.targets, since(t2));
 
   std::filesystem::create_directories(o.out);
+  if (openings)
+    write_openings_json(*openings, (std::filesystem::path(o.out) / "openings.json").string());
   SliceOptions slice;
   slice.height = height;
   slice.scans = scanners;
@@ -152,6 +195,7 @@ void run_map_nbv(const MapNbvOptions& o) {
       {"method", o.method},
       {"scanners", scanner_list},
       {"candidates", r.candidates.size()},
+      {"openings", openings ? nlohmann::json(openings->size()) : nlohmann::json(nullptr)},
       {"nbv", r.best ? nlohmann::json{{"x", r.best->position.x},
                                       {"y", r.best->position.y},
                                       {"z", r.best->position.z},
@@ -185,11 +229,12 @@ void add_map_nbv_command(CLI::App& app) {
       "from octomap_server or any OctoMap tool) or a SemiOcTree .ot. An OctoMap map becomes a "
       "semioctree of the same resolution (its leaf); the space it does not hold is classified "
       "from the scanner positions (seen → empty, hidden → occluded), or all taken as occluded "
-      "(--unobserved occluded). An occupancy map knows no doors or windows: what the scanners "
-      "saw through them counts as the room. The map's frame must be levelled with the floor at "
-      "z = 0. "
+      "(--unobserved occluded). Its doors and windows are found as `classify` finds them, "
+      "with its occupied leaves for points (the ceiling: its densest layer of occupied leaves "
+      "above 2 m, or --ceiling), and the space seen through them is out of the room. The "
+      "map's frame must be levelled with the floor at z = 0. "
       "Writes nbv.json (the NBV, its score and the stop percentage), semioctree.ot, "
-      "labels_color.ot, occupancy.bt and slice.png.");
+      "labels_color.ot, occupancy.bt and slice.png, and openings.json for an OctoMap map.");
   cmd->add_option("--map", o->map, "the map: .bt, OcTree .ot or SemiOcTree .ot")
       ->required()
       ->check(CLI::ExistingFile);
@@ -225,6 +270,13 @@ void add_map_nbv_command(CLI::App& app) {
   cmd->add_option("--robot-radius", o->robot_radius, "safety cylinder radius, m (0.05 to 5)")
       ->check(finite_in(0.05, 5))
       ->capture_default_str();
+  cmd->add_flag("--no-openings", o->skip_openings,
+                "OctoMap map: do not look for doors and windows (what was seen through them then "
+                "counts as the room)");
+  cmd->add_option("--ceiling", o->ceiling,
+                  "OctoMap map: ceiling height above the floor for finding doors and windows, m "
+                  "(default: the densest layer of occupied leaves above 2 m)")
+      ->check(finite_positive(100));
   cmd->add_option("--scanner-height", o->scanner_height,
                   "scanner optical centre above the floor, m (default: the last --scanner's z)")
       ->check(finite_positive(100));
