@@ -90,6 +90,10 @@ TEST(Survey, BadInputIsAClearErrorAndANonZeroExit) {
   EXPECT_NE(r.err.find("--max-scans must be at least 1"), std::string::npos) << r.err;
   r = run_cli("survey " + lab + " --method 4");
   EXPECT_NE(r.exit_code, 0);
+  r = run_cli("survey " + lab + " --policy oracle --no-coverage");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("drop --no-coverage"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find("survey of"), std::string::npos) << r.out;  // refused before starting
   const fs::path junk = scratch() / "junk.pcd";
   std::ofstream(junk) << "this is not a point cloud\n";
   r = run_cli("nbv --cloud " + junk.string() + " --out " + (scratch() / "bad_nbv").string());

@@ -99,6 +99,8 @@ OracleChoice oracle_choice(const std::vector<NbvCandidate>& candidates, const si
 
 void run_survey(const SurveyOptions& o) {
   const auto t_start = std::chrono::steady_clock::now();
+  if (o.policy == "oracle" && o.skip_coverage)
+    throw std::invalid_argument("--policy oracle chooses by coverage: drop --no-coverage");
   if (o.max_scans < 1)
     throw std::invalid_argument("--max-scans must be at least 1 (got " +
                                 std::to_string(o.max_scans) + ")");
@@ -133,8 +135,6 @@ void run_survey(const SurveyOptions& o) {
                 o.plan.leaf);
   std::filesystem::create_directories(o.out);
 
-  if (o.policy == "oracle" && o.skip_coverage)
-    throw std::invalid_argument("--policy oracle chooses by coverage: drop --no-coverage");
   const std::string cache = o.cache.empty() ? sim::default_cache_dir() : o.cache;
   std::optional<sim::CoverageReference> reference;  // loaded once, when first needed
   auto coverage_reference = [&]() -> const sim::CoverageReference& {
