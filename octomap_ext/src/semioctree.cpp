@@ -457,6 +457,12 @@ bool SemiOcTree::insertRay(const octomap::point3d&, const octomap::point3d&, dou
 std::istream& SemiOcTree::readBinaryData(std::istream&) {
   refuse("readBinary (a .bt file holds occupancy only; import it, see import.h)");
 }
+std::ostream& SemiOcTree::writeBinaryData(std::ostream&) const {
+  refuse("writeBinary (a .bt file holds occupancy only; see export.h)");
+}
+void SemiOcTree::toMaxLikelihood() {
+  refuse("toMaxLikelihood (writeBinary calls it; a .bt file holds occupancy only, see export.h)");
+}
 
 bool SemiOcTree::isNodeCollapsible(const SemiOcTreeNode* node) const {
   if (!nodeChildExists(node, 0)) return false;

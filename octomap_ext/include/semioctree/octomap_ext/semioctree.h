@@ -196,9 +196,13 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
   // coarse voxels the index never hears of, so a map would read back
   // differently from what the updates said. They throw std::logic_error, also
   // through a base-class reference; edit the map with set_label / split.
-  // readBinary (a .bt holds occupancy only) throws from readBinaryData after
-  // OctoMap's reader has cleared the tree: it is left empty. To make a
-  // SemiOcTree from an OctoMap map, see import.h.
+  // The .bt format holds occupancy only: toMaxLikelihood (which writeBinary
+  // calls) would turn unknown and occluded octants' values occupied, and
+  // readBinaryData has no labels to read; both throw. Through a base-class
+  // reference OctoMap's readBinary clears the tree and takes the file's
+  // resolution before readBinaryData throws (an empty .bt even reads without
+  // error). To make a SemiOcTree from an OctoMap map see import.h, to write
+  // a .bt export.h.
   SemiOcTreeNode* updateNode(const octomap::OcTreeKey& key, float log_odds_update,
                              bool lazy_eval = false) override;
   SemiOcTreeNode* updateNode(const octomap::point3d& value, float log_odds_update,
@@ -230,9 +234,19 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
   bool insertRay(const octomap::point3d& origin, const octomap::point3d& end,
                  double maxrange = -1.0, bool lazy_eval = false) override;
   std::istream& readBinaryData(std::istream& s) override;
-  // Not virtual in OctoMap, so hidden here: deleteNode would free indexed
+  std::ostream& writeBinaryData(std::ostream& s) const override;
+  void toMaxLikelihood() override;
+  // Not virtual in OctoMap, so hidden here, on the SemiOcTree type only (a
+  // base-class reference still reaches them): deleteNode would free indexed
   // coarse voxels (use set_label(key, level, Label::kUnknown) to forget an
-  // octant), swapContent would leave both trees' indexes stale.
+  // octant), swapContent would leave both trees' indexes stale, and the .bt
+  // readers and writers are the above's callers.
+  bool readBinary(std::istream& s) = delete;
+  bool readBinary(const std::string& filename) = delete;
+  bool writeBinary(std::ostream& s) = delete;
+  bool writeBinary(const std::string& filename) = delete;
+  bool writeBinaryConst(std::ostream& s) const = delete;
+  bool writeBinaryConst(const std::string& filename) const = delete;
   bool deleteNode(double x, double y, double z, unsigned int depth = 0) = delete;
   bool deleteNode(const octomap::point3d& value, unsigned int depth = 0) = delete;
   bool deleteNode(const octomap::OcTreeKey& key, unsigned int depth = 0) = delete;
