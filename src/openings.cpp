@@ -426,12 +426,16 @@ std::vector<DetectedOpening> detect_openings_in_map(const SemiOcTree& tree, doub
                                                     const OpeningParams& params,
                                                     OpeningsReport* report) {
   const double r = tree.leaf_size();
+  // Leaf layers (z key) whose centre is more than a leaf above the floor and
+  // below the ceiling; in layer units, with a margin, so that a layer exactly a
+  // leaf from a ceiling found by map_ceiling_height is always left out.
+  const double top = ceiling_height / r - 1.5 - 1e-6;
   Cloud centres;
   tree.for_each_octant([&](const Octant& o) {
     if (o.label() != Label::kOccupied) return;
-    const Point3& c = o.center;
-    if (c.z > r && c.z < ceiling_height - r)
-      centres.push_back(pcl::PointXYZ{float(c.x), float(c.y), float(c.z)});
+    const std::int64_t layer = std::int64_t(o.key.k[2]) - 32768;
+    if (layer >= 1 && double(layer) < top)
+      centres.push_back(pcl::PointXYZ{float(o.center.x), float(o.center.y), float(o.center.z)});
   });
   // A surface near a leaf boundary leaves two layers of occupied leaves, whose
   // centres lie a leaf apart: one wall, not two parallel ones.

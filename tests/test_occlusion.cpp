@@ -227,6 +227,21 @@ TEST(Occlusion, FreeSpaceSeenThroughADoorBecomesOut) {
   EXPECT_EQ(label_at(*tree, Point3(1.0, 0.5, 1.0)), Label::kEmpty);  // this side, seen directly
   EXPECT_EQ(label_at(*tree, Point3(2.025, 2.0, 1.0)), Label::kDoor);
   EXPECT_EQ(label_at(*tree, Point3(2.025, 0.5, 1.0)), Label::kOccupied);
+
+  // With a second position beyond the wall (range 1.6 m), what it sees
+  // directly stays empty although the first sees it through the door.
+  const auto again = wall_with_door();
+  space.clear();
+  again->for_each_octant([&](const Octant& o) {
+    if (o.label() != Label::kOccupied) space.push_back(o);
+  });
+  for (const Octant& o : space) again->set_label(o.key, o.level, Label::kEmpty);
+  label_door(*again);
+  ScannerView beyond{Point3(3.0, 0.5, 1.2)};
+  beyond.max_range = 1.6;
+  study_occlusion(*again, {here, beyond}, through);
+  EXPECT_EQ(label_at(*again, Point3(3.0, 2.0, 1.0)), Label::kEmpty);  // 1.51 m from beyond
+  EXPECT_EQ(label_at(*again, Point3(3.8, 3.2, 1.0)), Label::kOut);    // out of its range
 }
 
 TEST(Occlusion, RangeAndElevationLimits) {

@@ -302,6 +302,38 @@ TEST(Openings, LabSceneFromStartMatchesGroundTruth) {
   }
 }
 
+TEST(Openings, MapCeilingNeedsAFloorAndADenseLayerAboveTwoMetres) {
+  SemiOcTree t(0.05, 0.8);
+  auto fill_layer = [&](double z, double side) {  // occupied leaves over side × side m
+    for (double x = 0.025; x < side; x += 0.05)
+      for (double y = 0.025; y < side; y += 0.05) {
+        octomap::OcTreeKey k;
+        ASSERT_TRUE(t.key_of({x, y, z}, k));
+        t.set_label(k, t.coarse_level(), Label::kOccupied);
+      }
+  };
+  fill_layer(2.725, 3.0);  // a ceiling, but no floor: not levelled at z = 0
+  EXPECT_FALSE(map_ceiling_height(t));
+  fill_layer(0.025, 3.0);  // the floor
+  ASSERT_TRUE(map_ceiling_height(t));
+  EXPECT_DOUBLE_EQ(*map_ceiling_height(t), 2.725);
+  fill_layer(1.525, 3.0);  // a dense layer below 2 m does not count
+  EXPECT_DOUBLE_EQ(*map_ceiling_height(t), 2.725);
+  EXPECT_FALSE(map_ceiling_height(t, 3.0));  // nothing above 3 m
+  SemiOcTree sparse(0.05, 0.8);              // a floor and a far thinner layer above 2 m
+  for (double x = 0.025; x < 3.0; x += 0.05)
+    for (double y = 0.025; y < 3.0; y += 0.05) {
+      octomap::OcTreeKey k;
+      ASSERT_TRUE(sparse.key_of({x, y, 0.025}, k));
+      sparse.set_label(k, sparse.coarse_level(), Label::kOccupied);
+      if (y < 0.5) {
+        ASSERT_TRUE(sparse.key_of({x, y, 2.525}, k));
+        sparse.set_label(k, sparse.coarse_level(), Label::kOccupied);
+      }
+    }
+  EXPECT_FALSE(map_ceiling_height(sparse));  // 1/6 of the floor's leaves: not a ceiling
+}
+
 // The way in for OctoMap users: the lab mapped by OctoMap itself from the start
 // (insertPointCloud, as octomap_server does), imported, its ceiling found and
 // its doors and window detected in the map alone, without points.

@@ -63,8 +63,9 @@ std::optional<std::vector<DetectedOpening>> find_openings_in_map(
       o.ceiling > 0 ? std::optional<double>(o.ceiling) : map_ceiling_height(tree);
   if (!ceiling) {
     std::printf(
-        "doors and windows: not looked for, no ceiling found (no layer of occupied leaves above "
-        "2 m holds a quarter as many as the floor at z = 0); give --ceiling\n");
+        "doors and windows: not looked for, no ceiling found. That needs occupied leaves at the "
+        "floor, z = 0 (is the map levelled there?), and a layer above 2 m with at least a quarter "
+        "as many; give --ceiling if the floor is there\n");
     return std::nullopt;
   }
   OpeningsReport rep;
@@ -234,7 +235,8 @@ void add_map_nbv_command(CLI::App& app) {
       "above 2 m, or --ceiling), and the space seen through them is out of the room. The "
       "map's frame must be levelled with the floor at z = 0. "
       "Writes nbv.json (the NBV, its score and the stop percentage), semioctree.ot, "
-      "labels_color.ot, occupancy.bt and slice.png, and openings.json for an OctoMap map.");
+      "labels_color.ot, occupancy.bt and slice.png, and openings.json when doors and windows "
+      "were looked for.");
   cmd->add_option("--map", o->map, "the map: .bt, OcTree .ot or SemiOcTree .ot")
       ->required()
       ->check(CLI::ExistingFile);
@@ -272,7 +274,7 @@ void add_map_nbv_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--no-openings", o->skip_openings,
                 "OctoMap map: do not look for doors and windows (what was seen through them then "
-                "counts as the room)");
+                "counts as the room; a SemiOcTree .ot keeps its own labels either way)");
   cmd->add_option("--ceiling", o->ceiling,
                   "OctoMap map: ceiling height above the floor for finding doors and windows, m "
                   "(default: the densest layer of occupied leaves above 2 m)")
