@@ -143,17 +143,20 @@ std::vector<CellRect> find_hole_candidates(const WallGrid& g, double ceiling,
 }
 
 // Direct line of sight from any scanner to the cell centre: the segment is
-// traversed through the octants and stops at the first occupied one. It ends a
-// little before the cell centre because the wall leaves at the rim of the hole
-// (and jamb points) are occupied and would hide the hole's own edge cells.
+// traversed through the octants and stops at the first occupied one. It ends
+// `margin` in front of the wall plane (measured along the wall's normal, not
+// along the segment) because the leaves of the wall's surface around the hole
+// are occupied and reach up to a leaf in front of the plane: cut along the
+// segment, an oblique line to a cell beside a jamb still ended inside the
+// jamb's surface leaf, and a whole column of the hole went unseen.
 bool cell_visible(const SemiOcTree& tree, const std::vector<Point3>& scanners,
-                  const Eigen::Vector3d& target, double margin, std::size_t& rays) {
+                  const Eigen::Vector3d& target, const Eigen::Vector3d& wall_normal, double margin,
+                  std::size_t& rays) {
   for (const Point3& s : scanners) {
     const Eigen::Vector3d a(s.x, s.y, s.z);
-    const Eigen::Vector3d dir = target - a;
-    const double len = dir.norm();
-    if (len <= margin) return true;
-    const Eigen::Vector3d end = target - dir * (margin / len);
+    const double off_wall = std::abs((a - target).dot(wall_normal));
+    if (off_wall <= margin) return true;
+    const Eigen::Vector3d end = target + (a - target) * (margin / off_wall);
     ++rays;
     const TraversalEnd e =
         tree.traverse(Point3(a.x(), a.y(), a.z()), Point3(end.x(), end.y(), end.z()),
@@ -171,7 +174,7 @@ double los_fraction(WallGrid& g, const WallFrame& f, const CellRect& r, const Se
       std::int8_t& v = g.los[std::size_t(row) * g.cols + c];
       if (v < 0) {
         const Eigen::Vector3d centre = f.at(g.u0 + (c + 0.5) * g.cell, (row + 0.5) * g.cell);
-        v = cell_visible(tree, scanners, centre, margin, rays) ? 1 : 0;
+        v = cell_visible(tree, scanners, centre, f.normal, margin, rays) ? 1 : 0;
       }
       seen += std::size_t(v);
     }

@@ -65,9 +65,11 @@ struct OpeningParams {
   // rectangle is fixed by what is seen and not by the shadow. A pure shadow is
   // seen through nowhere and stays rejected. 0 turns the rule off (paper only).
   double partly_hidden_min_los = 0.4;
-  // A LOS ray ends this far (in leaf sizes) before the cell centre, so that the
-  // occupied wall leaves at the rim of the hole do not count as obstacles.
-  double los_end_margin_leaves = 1.0;
+  // A LOS ray ends this far (in leaf sizes) in front of the wall plane, measured
+  // along the wall's normal, so that the occupied leaves of the wall's surface
+  // at the rim of the hole (they reach up to a leaf in front of the plane) do
+  // not count as obstacles, however obliquely the ray comes in.
+  double los_end_margin_leaves = 1.5;
 };
 
 enum class OpeningKind { kDoor, kWindow };
