@@ -537,6 +537,11 @@ std::vector<Target> method2_targets(const SemiOcTree& tree, unsigned level) {
 
 // --- candidates -----------------------------------------------------------------------
 
+double floor_layer_clearance(const RobotGeometry& robot, double leaf_size) {
+  if (!(robot.ground_clearance > 0)) return 0.0;  // no clearance: the floor layer counts too
+  return std::max(robot.ground_clearance, leaf_size);
+}
+
 std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry& robot,
                                     const Point3& robot_position,
                                     const std::vector<Point3>& past_scans, const NbvParams& params,
@@ -572,10 +577,10 @@ std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry&
   };
 
   // Leaf layers of the cylinder: z ∈ [0, top); octants lying wholly below the
-  // ground clearance are driven over.
+  // ground clearance, or within the floor's own leaf layer, are driven over.
   const std::int64_t layers =
       std::max<std::int64_t>(1, std::llround(std::ceil(robot.top() / r - 1e-9)));
-  const double clearance = std::max(0.0, robot.ground_clearance / r + 1e-9);  // in cells
+  const double clearance = floor_layer_clearance(robot, r) / r + 1e-9;  // in cells
   for (int cx = lo.x; cx <= hi.x; ++cx)
     for (int cy = lo.y; cy <= hi.y; ++cy)
       for (std::int64_t cz = 0; cz <= (layers - 1) >> k; ++cz)

@@ -548,6 +548,45 @@ TEST(Nbv, CandidatesKeepTheSafetyCylinderFreeOfObstacles) {
   EXPECT_TRUE(has_candidate_near(find_candidates(m.t, slim, start, {}, p), 1.375, 1.025));
 }
 
+// At a 0.1 m leaf the floor's layer [0, 0.1) holds the floor's points (all of them in an
+// OctoMap map, what the floor cut leaves in ours). Below the leaf the map cannot tell an
+// obstacle from the floor: that layer is driven over, a taller obstacle is not. Before,
+// a leaf above the 5 cm clearance made the floor an obstacle everywhere: `survey --leaf
+// 0.1` stopped after its first scan with no feasible candidate.
+TEST(Nbv, FloorLayerOfACoarseLeafIsDrivenOver) {
+  SemiOcTree t{0.1, 0.8};
+  for (int x = 0; x < 6; ++x)
+    for (int y = 0; y < 6; ++y)
+      for (int z = 0; z < 3; ++z) t.create_coarse({x, y, z}, Label::kEmpty);
+  auto leaf = [&](double x, double y, double z, Label l) {
+    octomap::OcTreeKey k;
+    ASSERT_TRUE(t.key_of({x, y, z}, k));
+    t.set_label(k, t.coarse_level(), l);
+  };
+  for (double x = 0.05; x < 4.8; x += 0.1)
+    for (double y = 0.05; y < 4.8; y += 0.1) leaf(x, y, 0.05, Label::kOccupied);  // the floor
+  leaf(1.25, 2.45, 0.15, Label::kOccupied);  // a box 0.2 m tall on the floor
+  leaf(1.25, 2.45, 0.05, Label::kOccupied);
+  NbvParams p;
+  p.candidate_spacing = 0.1;
+  const Point3 start(2.45, 2.45, 0);
+  RobotGeometry robot;
+  EXPECT_DOUBLE_EQ(floor_layer_clearance(robot, 0.1), 0.1);
+  EXPECT_DOUBLE_EQ(floor_layer_clearance(robot, 0.05), 0.05);
+  const std::vector<Point3> got = find_candidates(t, robot, start, {}, p);
+  // Clear of the map's border (unknown beyond it) by radius + leaf/2 = 0.55 m.
+  EXPECT_TRUE(has_candidate_near(got, 2.45, 2.45));
+  EXPECT_TRUE(has_candidate_near(got, 3.95, 3.95));
+  EXPECT_FALSE(has_candidate_near(got, 1.65, 2.45));  // 0.4 m from the box
+  EXPECT_TRUE(has_candidate_near(got, 1.85, 2.45));   // 0.6 m from it
+  EXPECT_GT(got.size(), 300u);
+  // No clearance: nothing is driven over, the floor blocks every cylinder.
+  RobotGeometry strict;
+  strict.ground_clearance = 0;
+  EXPECT_DOUBLE_EQ(floor_layer_clearance(strict, 0.1), 0.0);
+  EXPECT_TRUE(find_candidates(t, strict, start, {}, p).empty());
+}
+
 TEST(Nbv, CandidateGridGivesSeveralPositionsPerLargeOctant) {
   Map m(5, 5, 3);
   m.walls(4.0, 4.0, 2.4);

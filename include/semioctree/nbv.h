@@ -10,7 +10,9 @@
 //  * its safety cylinder (robot radius, from the floor to the top of the
 //    scanner) holds no obstacle: occupied, occluded or unknown space (also
 //    space without a coarse voxel, and outside the map). Obstacles lying wholly
-//    below RobotGeometry::ground_clearance are driven over. An obstacle leaf
+//    below RobotGeometry::ground_clearance, or wholly in the floor's own leaf
+//    layer z ∈ [0, leaf) when the leaf is larger (floor_layer_clearance), are
+//    driven over. An obstacle leaf
 //    cell is inside the cylinder when its centre is within radius + leaf/2 of
 //    the axis, horizontally. Because the cylinder is vertical, an obstacle is
 //    inside it exactly when the obstacle's column (projected on the floor) is,
@@ -191,6 +193,14 @@ struct NbvResult {
 
 // The functions below throw std::invalid_argument for a method other than 1, 2
 // or 3, a method-2 level finer than the tree's leaf, or a grid anchor beyond the key range.
+
+// The height below which the candidate test drives over obstacles: the robot's
+// ground clearance, or the leaf size if that is larger (0 for no clearance: then
+// nothing is driven over). The floor's leaf layer
+// holds what is left of the floor's points after the floor is cut (and all of
+// them in an OctoMap map), and the map cannot tell an obstacle lower than a leaf
+// from them: counted as obstacles, at a 0.1 m leaf they blocked every cylinder.
+double floor_layer_clearance(const RobotGeometry& robot, double leaf_size);
 
 // Feasible candidate positions (scanner positions, z = scanner height), in
 // grid order (y, then x). `robot_position`: the robot on the floor (its z is
