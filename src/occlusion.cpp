@@ -23,6 +23,12 @@ ViewLimits limits_of(const ScannerView& v) {
           sine(v.elevation_max_deg)};
 }
 
+// Door and window leaves entered this near the scanner are the opening it stands
+// in (a scan taken in a doorway, as surveyors do to link rooms), not one it looks
+// through: counted, everything that scan alone sees, on either side, would be
+// out. A robot's scanner stands farther than this from any opening it is not in.
+constexpr double kOwnOpeningReach = 0.3;  // m
+
 // Occupied octants entered at the very end of a segment only touch its end
 // point (a sample on a lattice corner shared with them): they hide nothing.
 constexpr double kEndTolerance = 1e-9;
@@ -47,7 +53,8 @@ Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, con
       blocked = true;
       return false;
     }
-    through_opening |= (l == Label::kDoor || l == Label::kWindow);
+    through_opening |=
+        (l == Label::kDoor || l == Label::kWindow) && s.t_enter * range >= kOwnOpeningReach;
     return true;
   };
   if (kMarked)

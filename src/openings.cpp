@@ -151,11 +151,13 @@ std::vector<CellRect> find_hole_candidates(const WallGrid& g, double ceiling,
 // jamb's surface leaf, and a whole column of the hole went unseen.
 bool cell_visible(const SemiOcTree& tree, const std::vector<Point3>& scanners,
                   const Eigen::Vector3d& target, const Eigen::Vector3d& wall_normal, double margin,
-                  std::size_t& rays) {
+                  double min_off_wall, std::size_t& rays) {
   for (const Point3& s : scanners) {
     const Eigen::Vector3d a(s.x, s.y, s.z);
     const double off_wall = std::abs((a - target).dot(wall_normal));
-    if (off_wall <= margin) return true;
+    // A scanner in the wall's plane (a scan taken in one of its doorways) sees
+    // the wall edge-on: its lines run along the face and would confirm any hole.
+    if (off_wall < min_off_wall || off_wall <= margin) continue;
     const Eigen::Vector3d end = target + (a - target) * (margin / off_wall);
     ++rays;
     const TraversalEnd e =
@@ -167,14 +169,15 @@ bool cell_visible(const SemiOcTree& tree, const std::vector<Point3>& scanners,
 }
 
 double los_fraction(WallGrid& g, const WallFrame& f, const CellRect& r, const SemiOcTree& tree,
-                    const std::vector<Point3>& scanners, double margin, std::size_t& rays) {
+                    const std::vector<Point3>& scanners, double margin, double min_off_wall,
+                    std::size_t& rays) {
   std::size_t seen = 0;
   for (int row = r.r0; row <= r.r1; ++row)
     for (int c = r.c0; c <= r.c1; ++c) {
       std::int8_t& v = g.los[std::size_t(row) * g.cols + c];
       if (v < 0) {
         const Eigen::Vector3d centre = f.at(g.u0 + (c + 0.5) * g.cell, (row + 0.5) * g.cell);
-        v = cell_visible(tree, scanners, centre, f.normal, margin, rays) ? 1 : 0;
+        v = cell_visible(tree, scanners, centre, f.normal, margin, min_off_wall, rays) ? 1 : 0;
       }
       seen += std::size_t(v);
     }
@@ -388,7 +391,8 @@ std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceili
         bool overlaps = false;
         for (const CellRect& k : kept) overlaps = overlaps || k.overlaps(r);
         if (overlaps) continue;
-        const double los = los_fraction(g, frame, r, tree, scanner_positions, margin, rep.los_rays);
+        const double los = los_fraction(g, frame, r, tree, scanner_positions, margin,
+                                        p.los_min_scanner_off_wall, rep.los_rays);
         const bool confirmed =
             los + 1e-12 >= p.los_min_fraction ||
             (p.partly_hidden_min_los > 0 && los + 1e-12 >= p.partly_hidden_min_los &&

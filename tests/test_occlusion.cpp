@@ -244,6 +244,38 @@ TEST(Occlusion, FreeSpaceSeenThroughADoorBecomesOut) {
   EXPECT_EQ(label_at(*again, Point3(3.8, 3.2, 1.0)), Label::kOut);    // out of its range
 }
 
+// A scan taken in the doorway (as surveyors do to link rooms) stands in the door's
+// leaves or just beyond them: that door is where it stands, not one it looks through,
+// so it sees both sides directly. Counted as a door crossed, everything it alone sees
+// was out, on either side.
+TEST(Occlusion, ScanFromADoorwaySeesBothSidesDirectly) {
+  for (const double x : {2.025, 2.15}) {  // in the door's leaf layer, 0.1 m beyond it
+    const ScannerView doorway{Point3(x, 2.0, 1.2)};
+    // The pipeline's study of unknown space.
+    const auto tree = wall_with_door();
+    label_door(*tree);
+    study_occlusion(*tree, {doorway});
+    EXPECT_EQ(label_at(*tree, Point3(3.0, 2.6, 1.0)), Label::kEmpty) << x;  // beyond
+    EXPECT_EQ(label_at(*tree, Point3(1.0, 1.4, 1.0)), Label::kEmpty) << x;  // this side
+    EXPECT_EQ(label_at(*tree, Point3(1.0, 3.6, 1.0)), Label::kEmpty) << x;  // this side
+    EXPECT_EQ(label_at(*tree, Point3(3.8, 0.3, 1.0)), Label::kEmpty) << x;  // beyond
+    // An imported map's free space, with the doorway scan and one from the room.
+    const auto map = wall_with_door();
+    std::vector<Octant> space;
+    map->for_each_octant([&](const Octant& o) {
+      if (o.label() != Label::kOccupied) space.push_back(o);
+    });
+    for (const Octant& o : space) map->set_label(o.key, o.level, Label::kEmpty);
+    label_door(*map);
+    OcclusionParams through;
+    through.scope = OcclusionScope::kFreeThroughOpenings;
+    study_occlusion(*map, {ScannerView{Point3(1.0, 2.0, 1.2)}, doorway}, through);
+    // Seen through the door from the room, and directly from the doorway.
+    for (const Point3& p : {Point3(3.0, 2.6, 1.0), Point3(3.8, 2.0, 1.2), Point3(3.6, 1.2, 1.5)})
+      EXPECT_EQ(label_at(*map, p), Label::kEmpty) << x << " at " << p.x << ", " << p.y;
+  }
+}
+
 TEST(Occlusion, RangeAndElevationLimits) {
   const auto tree = discretize(room_with_pillar(), 2.4, {0.05, 0.8});
   ScannerView v{Point3(1.0, 2.0, 1.2)};

@@ -204,6 +204,12 @@ TEST(Openings, OcclusionShadowIsRejectedByLineOfSight) {
                o.los_fraction < 0.85;
       });
   EXPECT_TRUE(shadow_rejected);
+
+  // A second scan taken beside the wall, 0.1 m off its plane (as in one of its
+  // doorways), sees the wall edge-on: its lines run along the face, past the
+  // cabinet, and would confirm the shadow. It does not count for that wall.
+  const std::vector<Point3> with_edge_on{scanners[0], Point3(2.5, 0.1, 1.5)};
+  EXPECT_TRUE(detect_openings(cloud, 3.0, *tree, with_edge_on).empty());
 }
 
 // --- lab scene ------------------------------------------------------------------------

@@ -70,6 +70,10 @@ struct OpeningParams {
   // at the rim of the hole (they reach up to a leaf in front of the plane) do
   // not count as obstacles, however obliquely the ray comes in.
   double los_end_margin_leaves = 1.5;
+  // A scanner nearer the wall's plane than this (a scan taken in one of the
+  // wall's doorways) does not confirm that wall's holes: it sees the wall
+  // edge-on, and its lines along the face would confirm any shadow, m.
+  double los_min_scanner_off_wall = 0.3;
 };
 
 enum class OpeningKind { kDoor, kWindow };

@@ -215,8 +215,17 @@ void run_map_nbv(const MapNbvOptions& o) {
                 r.best->position.x, r.best->position.y, r.best->position.z, r.best->score,
                 r.stop_percent,
                 complete ? "below the threshold: the map is complete" : "above the threshold");
+  else if (!r.candidate_report.robot_in_map)
+    std::printf("no feasible next best view: the robot at (%.3f, %.3f) is outside the map\n",
+                robot.x, robot.y);
   else
-    std::printf("no feasible next best view\n");
+    std::printf(
+        "no feasible next best view: of %zu grid points, %zu are not empty space at scanner "
+        "height, %zu have an obstacle in their safety cylinder (radius %.2f m) and %zu cannot be "
+        "reached from the robot at (%.3f, %.3f)\n",
+        r.candidate_report.grid_points, r.candidate_report.not_empty,
+        r.candidate_report.cylinder_blocked, geometry.radius, r.candidate_report.unreachable,
+        robot.x, robot.y);
   std::printf("wrote %s and the map files in %s\n", json_path.c_str(), o.out.c_str());
 }
 
