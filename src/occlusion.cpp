@@ -8,26 +8,106 @@
 
 namespace semioctree {
 
+ReturnDirections::ReturnDirections()
+    : bins_(std::size_t(kAzimuthBins) * std::size_t(kElevationBins), 0) {}
+
+std::size_t ReturnDirections::bin_of(double dx, double dy, double dz) {
+  const double az = std::atan2(dy, dx) * (180.0 / M_PI) + 180.0;                 // [0, 360]
+  const double el = std::atan2(dz, std::hypot(dx, dy)) * (180.0 / M_PI) + 90.0;  // [0, 180]
+  const int a = std::clamp(int(az), 0, kAzimuthBins - 1);
+  const int e = std::clamp(int(el), 0, kElevationBins - 1);
+  return std::size_t(e) * kAzimuthBins + std::size_t(a);
+}
+
+void ReturnDirections::add(const Eigen::Vector3d& d) {
+  if (d.x() == 0 && d.y() == 0 && d.z() == 0) return;
+  bins_[bin_of(d.x(), d.y(), d.z())] = 1;
+}
+
+void ReturnDirections::close_gaps() {
+  std::vector<std::uint8_t> grown(bins_);
+  for (int e = 0; e < kElevationBins; ++e)
+    for (int a = 0; a < kAzimuthBins; ++a) {
+      if (!bins_[std::size_t(e) * kAzimuthBins + a]) continue;
+      for (int de = -1; de <= 1; ++de) {
+        const int ee = e + de;
+        if (ee < 0 || ee >= kElevationBins) continue;
+        for (int da = -1; da <= 1; ++da) {
+          const int aa = (a + da + kAzimuthBins) % kAzimuthBins;  // azimuth wraps around
+          grown[std::size_t(ee) * kAzimuthBins + aa] = 1;
+        }
+      }
+    }
+  bins_.swap(grown);
+}
+
+bool ReturnDirections::has(double dx, double dy, double dz) const {
+  return bins_[bin_of(dx, dy, dz)] != 0;
+}
+
+std::size_t ReturnDirections::bins_with_returns() const {
+  return std::size_t(std::count(bins_.begin(), bins_.end(), std::uint8_t(1)));
+}
+
+std::shared_ptr<const ReturnDirections> return_directions(const Cloud& scan,
+                                                          const Eigen::Matrix3d& scanner_to_map) {
+  auto r = std::make_shared<ReturnDirections>();
+  for (const auto& p : scan) {
+    const Eigen::Vector3d d(p.x, p.y, p.z);
+    if (d.allFinite()) r->add(scanner_to_map * d);
+  }
+  r->close_gaps();
+  return r;
+}
+
 namespace {
 
 // Per-view constants: the elevation limits as bounds on dz / range, so that a
 // segment needs no trigonometry.
+// A scan taken in a doorway (as surveyors do to link rooms) stands in the door:
+// that door is where it stands, not one it looks through, so the door's leaves
+// do not make what it sees `out` (counted, everything that scan alone saw, on
+// either side, was out). A view stands in a door when a door leaf lies within
+// kDoorwayReach of its optical centre; it then ignores the door leaves within
+// kOwnDoorReach of it (a door is at most 2.5 m wide and 2.6 m high), however
+// obliquely its lines cross them. Windows do not count: nobody scans from one.
+constexpr double kDoorwayReach = 0.3;  // m
+constexpr double kOwnDoorReach = 3.0;  // m
+
+bool stands_in_a_door(const SemiOcTree& tree, const Point3& c) {
+  const double r = tree.leaf_size();
+  const int n = int(std::ceil(kDoorwayReach / r)) + 1;
+  for (int i = -n; i <= n; ++i)
+    for (int j = -n; j <= n; ++j)
+      for (int k = -n; k <= n; ++k) {
+        const std::optional<Octant> o =
+            tree.find_octant(Point3(c.x + i * r, c.y + j * r, c.z + k * r));
+        if (!o || o->label() != Label::kDoor) continue;
+        // Distance from the optical centre to the leaf's box.
+        const double h = o->size / 2;
+        const double dx = std::max(0.0, std::abs(c.x - o->center.x) - h);
+        const double dy = std::max(0.0, std::abs(c.y - o->center.y) - h);
+        const double dz = std::max(0.0, std::abs(c.z - o->center.z) - h);
+        if (dx * dx + dy * dy + dz * dz <= kDoorwayReach * kDoorwayReach) return true;
+      }
+  return false;
+}
+
 struct ViewLimits {
   const ScannerView* view;
   double min_range2, max_range2, sin_min, sin_max;
+  bool in_doorway;
 };
 
-ViewLimits limits_of(const ScannerView& v) {
+ViewLimits limits_of(const SemiOcTree& tree, const ScannerView& v) {
   auto sine = [](double deg) { return std::sin(std::clamp(deg, -90.0, 90.0) * M_PI / 180.0); };
-  return {&v, v.min_range * v.min_range, v.max_range * v.max_range, sine(v.elevation_min_deg),
-          sine(v.elevation_max_deg)};
+  return {&v,
+          v.min_range * v.min_range,
+          v.max_range * v.max_range,
+          sine(v.elevation_min_deg),
+          sine(v.elevation_max_deg),
+          stands_in_a_door(tree, v.position)};
 }
-
-// Door and window leaves entered this near the scanner are the opening it stands
-// in (a scan taken in a doorway, as surveyors do to link rooms), not one it looks
-// through: counted, everything that scan alone sees, on either side, would be
-// out. A robot's scanner stands farther than this from any opening it is not in.
-constexpr double kOwnOpeningReach = 0.3;  // m
 
 // Occupied octants entered at the very end of a segment only touch its end
 // point (a sample on a lattice corner shared with them): they hide nothing.
@@ -43,6 +123,7 @@ Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, con
   if (range2 < lim.min_range2 || range2 > lim.max_range2) return Visibility::kHidden;
   const double range = std::sqrt(range2);
   if (dz < lim.sin_min * range || dz > lim.sin_max * range) return Visibility::kHidden;
+  if (lim.view->returns && !lim.view->returns->has(dx, dy, dz)) return Visibility::kHidden;
   bool through_opening = false, blocked = false;
   auto visit = [&](const RayStep& s) {
     if (s.t_enter >= 1.0 - kEndTolerance) return false;
@@ -54,7 +135,8 @@ Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, con
       return false;
     }
     through_opening |=
-        (l == Label::kDoor || l == Label::kWindow) && s.t_enter * range >= kOwnOpeningReach;
+        l == Label::kWindow ||
+        (l == Label::kDoor && !(lim.in_doorway && s.t_enter * range < kOwnDoorReach));
     return true;
   };
   if (kMarked)
@@ -167,7 +249,7 @@ std::vector<ScannerView> scanner_views(const std::vector<Point3>& positions,
 Visibility point_visibility(const SemiOcTree& tree, const std::vector<ScannerView>& views,
                             const Point3& p) {
   std::vector<ViewLimits> limits;
-  for (const ScannerView& v : views) limits.push_back(limits_of(v));
+  for (const ScannerView& v : views) limits.push_back(limits_of(tree, v));
   std::size_t segments = 0;
   return best_visibility<false>(tree, limits, p, segments);
 }
@@ -181,7 +263,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
   // (the labels set here never block a ray), so the result does not depend on
   // the number of threads.
   std::vector<ViewLimits> limits;
-  for (const ScannerView& v : views) limits.push_back(limits_of(v));
+  for (const ScannerView& v : views) limits.push_back(limits_of(tree, v));
   // Rays care only about these labels: refined space without them is one step.
   tree.mark_subtrees(label_bit(Label::kOccupied) | label_bit(Label::kDoor) |
                      label_bit(Label::kWindow));

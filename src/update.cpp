@@ -43,7 +43,9 @@ SurveyMap::SurveyMap(const SurveyMapParams& params) : params_(params), merged_(n
 }
 
 std::vector<ScannerView> SurveyMap::views() const {
-  return scanner_views(scanners_, params_.limits);
+  std::vector<ScannerView> v = scanner_views(scanners_, params_.limits);
+  for (std::size_t i = 0; i < v.size(); ++i) v[i].returns = returns_[i];
+  return v;
 }
 
 namespace {
@@ -68,7 +70,8 @@ const Cloud& SurveyMap::merged_cloud() const {
 }
 
 ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,
-                                     double ceiling_height) {
+                                     double ceiling_height,
+                                     std::shared_ptr<const ReturnDirections> returns) {
   ScanUpdateReport rep;
   rep.scan_index = scanners_.size();
   const bool first = !tree_;
@@ -86,6 +89,7 @@ ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,
     rep.occupied_leaves = mark_occupied(*tree_, points, ceiling_);
   }
   scanners_.push_back(scanner);
+  returns_.push_back(std::move(returns));
   *merged_ += points;
   if (params_.merged_spacing > 0) merged_ = decimate(*merged_, params_.merged_spacing);
   rep.seconds_occupancy = since(t0);

@@ -40,12 +40,12 @@ std::unique_ptr<SemiOcTree> wall_with_door() {
 }
 
 // Labels the hole's leaves in the wall plane door (as the openings stage does).
-void label_door(SemiOcTree& tree) {
+void label_door(SemiOcTree& tree, Label as = Label::kDoor) {
   for (double y = 1.525; y < 2.5; y += 0.05)
     for (double z = 0.025; z < 2.0; z += 0.05) {
       octomap::OcTreeKey k;
       tree.key_of({2.025, y, z}, k);
-      tree.set_label(k, tree.coarse_level(), Label::kDoor);
+      tree.set_label(k, tree.coarse_level(), as);
     }
 }
 
@@ -246,8 +246,9 @@ TEST(Occlusion, FreeSpaceSeenThroughADoorBecomesOut) {
 
 // A scan taken in the doorway (as surveyors do to link rooms) stands in the door's
 // leaves or just beyond them: that door is where it stands, not one it looks through,
-// so it sees both sides directly. Counted as a door crossed, everything it alone sees
-// was out, on either side.
+// so it sees both sides directly, also along lines that cross the door's leaves
+// obliquely, far from the scanner. Counted as a door crossed, everything it alone saw
+// was out, on either side. A window stays a window: nobody scans from one.
 TEST(Occlusion, ScanFromADoorwaySeesBothSidesDirectly) {
   for (const double x : {2.025, 2.15}) {  // in the door's leaf layer, 0.1 m beyond it
     const ScannerView doorway{Point3(x, 2.0, 1.2)};
@@ -259,6 +260,8 @@ TEST(Occlusion, ScanFromADoorwaySeesBothSidesDirectly) {
     EXPECT_EQ(label_at(*tree, Point3(1.0, 1.4, 1.0)), Label::kEmpty) << x;  // this side
     EXPECT_EQ(label_at(*tree, Point3(1.0, 3.6, 1.0)), Label::kEmpty) << x;  // this side
     EXPECT_EQ(label_at(*tree, Point3(3.8, 0.3, 1.0)), Label::kEmpty) << x;  // beyond
+    // Crossing the door's leaves 0.3–0.5 m from the scanner, at 70° from the normal.
+    EXPECT_EQ(label_at(*tree, Point3(1.7, 3.35, 1.2)), Label::kEmpty) << x;
     // An imported map's free space, with the doorway scan and one from the room.
     const auto map = wall_with_door();
     std::vector<Octant> space;
@@ -274,6 +277,74 @@ TEST(Occlusion, ScanFromADoorwaySeesBothSidesDirectly) {
     for (const Point3& p : {Point3(3.0, 2.6, 1.0), Point3(3.8, 2.0, 1.2), Point3(3.6, 1.2, 1.5)})
       EXPECT_EQ(label_at(*map, p), Label::kEmpty) << x << " at " << p.x << ", " << p.y;
   }
+  // The same hole as a window, a scanner 0.25 m in front of it: what it sees through
+  // the window is out.
+  const auto tree = wall_with_door();
+  label_door(*tree, Label::kWindow);
+  study_occlusion(*tree, {ScannerView{Point3(1.75, 2.0, 1.2)}});
+  EXPECT_EQ(label_at(*tree, Point3(3.0, 2.0, 1.0)), Label::kOut);
+  EXPECT_EQ(label_at(*tree, Point3(3.0, 3.0, 1.5)), Label::kOut);
+}
+
+TEST(Occlusion, ReturnDirectionsAreBinnedByDegreeAndTheirGapsClosed) {
+  ReturnDirections r;
+  r.add(Eigen::Vector3d::Zero());  // no direction
+  EXPECT_EQ(r.bins_with_returns(), 0u);
+  r.add(Eigen::Vector3d(2, 0, 0));
+  r.add(Eigen::Vector3d(-1, 0.001, 0));  // azimuth just under 180°
+  EXPECT_TRUE(r.has(1, 0, 0));
+  EXPECT_TRUE(r.has(5, 0.0001, 0.0001));
+  EXPECT_FALSE(r.has(0, 1, 0));
+  const auto deg = [](double a_deg, double e_deg) {
+    const double a = a_deg * M_PI / 180, e = e_deg * M_PI / 180;
+    return Eigen::Vector3d(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e));
+  };
+  auto has = [&](const Eigen::Vector3d& d) { return r.has(d.x(), d.y(), d.z()); };
+  EXPECT_FALSE(has(deg(1.5, 0)));
+  EXPECT_FALSE(has(deg(-179.5, 0)));
+  r.close_gaps();  // the neighbouring bins, across ±180° too
+  EXPECT_TRUE(has(deg(1.5, 0)));
+  EXPECT_TRUE(has(deg(-0.5, -0.5)));
+  EXPECT_TRUE(has(deg(-179.5, 0)));
+  EXPECT_FALSE(has(deg(2.5, 0)));
+  EXPECT_FALSE(has(deg(0.5, 2.5)));
+  EXPECT_EQ(r.bins_with_returns(), 18u);  // two blocks of 3 × 3 bins
+}
+
+// A wall 0.4 m from the scanner: the scanner drops the returns nearer than its minimum
+// range (0.6 m), so the map has a hole in the wall there (a disc of 0.45 m radius) and
+// lines through it met nothing. With the directions the scan got returns in, the space
+// behind the hole stays hidden.
+TEST(Occlusion, SurfaceNearerThanTheMinimumRangeStillHides) {
+  const Point3 scanner(3.6, 2.0, 1.2);
+  Cloud world, seen;  // the room's walls as scanned; the same in the scanner's frame
+  auto add = [&](double x, double y, double z) {
+    const double dx = x - scanner.x, dy = y - scanner.y, dz = z - scanner.z;
+    if (dx * dx + dy * dy + dz * dz < 0.6 * 0.6) return;  // dropped by the scanner
+    world.push_back(pcl::PointXYZ{float(x), float(y), float(z)});
+    seen.push_back(pcl::PointXYZ{float(dx), float(dy), float(dz)});
+  };
+  for (double u = 0.01; u < 4; u += 0.02)
+    for (double z = 0.01; z < 2.4; z += 0.02) {
+      add(0.01, u, z), add(3.99, u, z);  // walls x = 0 and x = 4
+      add(u, 0.01, z), add(u, 3.99, z);  // walls y = 0 and y = 4
+    }
+  add(5.9, 5.9, 0.01);  // something far beyond the corner: the map reaches x, y = 6.4
+  const Point3 behind(4.5, 2.0, 1.2), room(1.0, 2.0, 1.2);
+
+  const auto leaky = discretize(world, 2.4, {0.05, 0.8});
+  study_occlusion(*leaky, {ScannerView{scanner}});
+  EXPECT_EQ(label_at(*leaky, behind), Label::kEmpty);  // seen through the hole
+  EXPECT_EQ(label_at(*leaky, room), Label::kEmpty);
+
+  const auto tree = discretize(world, 2.4, {0.05, 0.8});
+  ScannerView view{scanner};
+  view.returns = return_directions(seen, Eigen::Matrix3d::Identity());
+  study_occlusion(*tree, {view});
+  EXPECT_EQ(label_at(*tree, behind), Label::kOccluded);
+  EXPECT_EQ(label_at(*tree, Point3(4.3, 1.6, 0.9)), Label::kOccluded);
+  EXPECT_EQ(label_at(*tree, room), Label::kEmpty);
+  EXPECT_EQ(label_at(*tree, Point3(2.0, 3.0, 1.4)), Label::kEmpty);  // returns from y = 4
 }
 
 TEST(Occlusion, RangeAndElevationLimits) {

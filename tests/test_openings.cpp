@@ -205,9 +205,11 @@ TEST(Openings, OcclusionShadowIsRejectedByLineOfSight) {
       });
   EXPECT_TRUE(shadow_rejected);
 
-  // A second scan taken beside the wall, 0.1 m off its plane (as in one of its
-  // doorways), sees the wall edge-on: its lines run along the face, past the
-  // cabinet, and would confirm the shadow. It does not count for that wall.
+  // A second scan taken between the cabinet and the wall, 0.1 m off the wall's plane
+  // (as in one of its doorways): the wall is nearer than its minimum range, so it
+  // recorded no points of it, and its short lines to the shadow's cells met nothing:
+  // it would confirm the shadow. A scanner that near a wall's plane does not count for
+  // that wall.
   const std::vector<Point3> with_edge_on{scanners[0], Point3(2.5, 0.1, 1.5)};
   EXPECT_TRUE(detect_openings(cloud, 3.0, *tree, with_edge_on).empty());
 }

@@ -120,6 +120,34 @@ TEST(Update, PointsAboveTheFirstCeilingAreLeftOut) {
   EXPECT_EQ(map.tree().find_coarse(map.tree().coarse_index(k)), nullptr);
 }
 
+// Each scan keeps the directions it got returns in, and the study keeps to them: a scan
+// that got none (everything nearer than its minimum range, say) sees nothing.
+TEST(Update, EachScanKeepsTheDirectionsItGotReturnsIn) {
+  const Point3 at(1.0, 3.0, 1.2);
+  SurveyMap blind(params());
+  const auto none = std::make_shared<const ReturnDirections>();
+  blind.add_scan(room_scan(false), at, 2.4, none);
+  ASSERT_EQ(blind.views().size(), 1u);
+  EXPECT_EQ(blind.views()[0].returns, none);
+  SurveyMap seeing(params());
+  seeing.add_scan(room_scan(false), at, 2.4);
+  EXPECT_EQ(seeing.views()[0].returns, nullptr);
+  const std::map<Label, double> b = volumes(blind.tree()), s = volumes(seeing.tree());
+  EXPECT_EQ(b.count(Label::kEmpty), 0u);
+  EXPECT_GT(s.at(Label::kEmpty), 20.0);  // most of the 4 × 4 × 2.4 m room
+  // A second scan with returns everywhere sees the room.
+  Cloud c = room_scan(false);
+  Cloud from_second;
+  const Point3 second(3.0, 3.0, 1.2);
+  for (const auto& p : c)
+    from_second.push_back(
+        pcl::PointXYZ{p.x - float(second.x), p.y - float(second.y), p.z - float(second.z)});
+  blind.add_scan(c, second, 2.4, return_directions(from_second, Eigen::Matrix3d::Identity()));
+  EXPECT_GT(volumes(blind.tree()).at(Label::kEmpty), 20.0);
+  EXPECT_EQ(blind.views()[0].returns, none);
+  EXPECT_NE(blind.views()[1].returns, nullptr);
+}
+
 // A real scan's returns from the scanner's mount and the robot's body lie
 // closer than the minimum range or below the lowest elevation: not mapped.
 TEST(Update, ReturnsOutsideTheScannerLimitsAreDropped) {

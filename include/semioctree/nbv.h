@@ -126,8 +126,9 @@ struct RobotGeometry {
   double radius = 0.5;          // safety cylinder radius, m
   double scanner_height = 1.5;  // optical centre above the floor, m
   double top_margin = 0.1;      // scanner head above the optical centre, m
-  // Obstacles lying wholly below this height are driven over (not in the
-  // cylinder). The floor segmentation removes the points within 2σ of the
+  // Obstacles lying wholly below this height, or wholly in the floor's leaf
+  // layer when the leaf is larger (floor_layer_clearance), are driven over (not
+  // in the cylinder). The floor segmentation removes the points within 2σ of the
   // floor, i.e. ~95 % of them: the rest become scattered occupied leaves (and
   // their tiny shadows) in the lowest leaf layer, all over the floor.
   double ground_clearance = 0.05;  // m

@@ -9,19 +9,58 @@
 // scanner sees it; the scanner's range and elevation limits apply.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "semioctree/octomap_ext/semioctree.h"
+#include "semioctree/scan_io.h"
 
 namespace semioctree {
 
+// The directions in which a scan got returns, seen from its optical centre in the map
+// frame, on a grid of 1° × 1° azimuth × elevation bins. A surface nearer than the
+// scanner's minimum range gives none (the scanner drops them), so the map holds no
+// occupied leaves there: without this the study's lines passed through it (a scan taken
+// in a doorway saw through its jambs into the wall and beyond). A line in a direction
+// without returns is hidden. Bins of 1° with their neighbours (close_gaps) tolerate
+// scans as sparse as about 1°; a hole in the returns must span a few degrees to count.
+class ReturnDirections {
+ public:
+  static constexpr int kAzimuthBins = 360, kElevationBins = 180;
+  ReturnDirections();
+  // `d`: from the optical centre, map frame, any length > 0 (a zero vector is ignored).
+  void add(const Eigen::Vector3d& d);
+  // After the last add: a bin next to one with returns counts as having them, so that
+  // a bin the scan's angular step happens to skip is no hole.
+  void close_gaps();
+  bool has(double dx, double dy, double dz) const;
+  std::size_t bins_with_returns() const;
+
+ private:
+  static std::size_t bin_of(double dx, double dy, double dz);
+  std::vector<std::uint8_t> bins_;
+};
+
+// The returns of a scan given in the scanner's frame (optical centre at the origin),
+// turned into the map frame by `scanner_to_map` (its translation is ignored), gaps closed.
+std::shared_ptr<const ReturnDirections> return_directions(const Cloud& scan,
+                                                          const Eigen::Matrix3d& scanner_to_map);
+
 struct ScannerView {
+  ScannerView() = default;
+  explicit ScannerView(const Point3& optical_centre) : position(optical_centre) {}
+
   Point3 position;                 // optical centre, map frame
   double min_range = 0.6;          // m
   double max_range = 60.0;         // m
   double elevation_min_deg = -60;  // 0 = horizontal
   double elevation_max_deg = 90;
+  // Where the scan got returns; null: in every direction (the paper's assumption, and
+  // all a map without its scans, such as an OctoMap map, can say).
+  std::shared_ptr<const ReturnDirections> returns;
 };
 
 enum class Visibility : std::uint8_t { kHidden = 0, kThroughOpening = 1, kDirect = 2 };

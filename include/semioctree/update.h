@@ -56,8 +56,11 @@ class SurveyMap {
   // Adds one scan: `points` levelled (floor at z = 0) and registered into the
   // survey frame, `scanner` its optical centre there. The first scan's
   // `ceiling_height` fixes the map's height; later calls' value is not used and
-  // their points above it are left out.
-  ScanUpdateReport add_scan(const Cloud& points, const Point3& scanner, double ceiling_height);
+  // their points above it are left out. `returns`: the directions in which the
+  // scan got returns (return_directions of the whole scan, floor included),
+  // which the occlusion study then keeps to; null: every direction.
+  ScanUpdateReport add_scan(const Cloud& points, const Point3& scanner, double ceiling_height,
+                            std::shared_ptr<const ReturnDirections> returns = nullptr);
 
   bool empty() const { return !tree_; }
   // The map and the merged cloud: std::logic_error before the first add_scan.
@@ -75,6 +78,7 @@ class SurveyMap {
   std::unique_ptr<SemiOcTree> tree_;
   Cloud::Ptr merged_;
   std::vector<Point3> scanners_;
+  std::vector<std::shared_ptr<const ReturnDirections>> returns_;  // one per scanner
   std::vector<DetectedOpening> openings_;
   double ceiling_ = 0;
 };

@@ -26,6 +26,7 @@ PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& param
   PreparedCloud out;
   Cloud merged;
   std::vector<Eigen::Vector3d> origins;
+  std::vector<std::pair<Cloud::Ptr, Eigen::Matrix3d>> returns;  // scanner frame, rotation
   for (std::size_t i = 0; i < in.files.size(); ++i) {
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<Scan> scans = read_scans(in.files[i]);
@@ -40,6 +41,7 @@ PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& param
       const Cloud::Ptr world = to_survey_frame(s);
       merged += *world;
       origins.push_back(s.pose.position());
+      returns.emplace_back(s.points, s.pose.scanner_to_survey.linear());
       out.raw_points += s.points->size() + s.invalid_dropped + outside;
       out.invalid_dropped += s.invalid_dropped;
       std::printf(
@@ -57,6 +59,8 @@ PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& param
     const Eigen::Vector3d p = out.pre.transform * o;
     out.scanners.emplace_back(p.x(), p.y(), p.z());
   }
+  for (const auto& [points, rotation] : returns)
+    out.returns.push_back(return_directions(*points, out.pre.transform.linear() * rotation));
   const auto& r = out.pre;
   std::printf(
       "preprocess: alpha %.3f°, beta %.3f°; floor σ %.1f mm (%zu removed), ceiling at %.3f m σ "
@@ -70,6 +74,13 @@ PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& param
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   std::fflush(stdout);
   return out;
+}
+
+std::vector<ScannerView> views_of(const PreparedCloud& cloud, const ScannerView& limits) {
+  std::vector<ScannerView> views = scanner_views(cloud.scanners, limits);
+  for (std::size_t i = 0; i < views.size() && i < cloud.returns.size(); ++i)
+    views[i].returns = cloud.returns[i];
+  return views;
 }
 
 void add_scan_source_options(CLI::App& cmd, ScanSource& src, const std::string& pose_help) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -23,6 +24,8 @@ struct CloudInput {
 struct PreparedCloud {
   PreprocessResult pre;
   std::vector<Point3> scanners;  // scanner positions in the levelled frame
+  // Per scanner, the directions its scan got returns in (levelled frame).
+  std::vector<std::shared_ptr<const ReturnDirections>> returns;
   std::size_t raw_points = 0;
   std::size_t invalid_dropped = 0;
   std::size_t outside_limits = 0;  // returns outside the scanner's limits, dropped
@@ -49,6 +52,8 @@ void add_scan_source_options(CLI::App& cmd, ScanSource& src, const std::string& 
 // --cloud nor --scene was given.
 PreparedCloud prepare(const ScanSource& src, const std::string& command,
                       const ScannerView* limits = nullptr);
+// One view per scanner of `cloud`, with `limits` and the directions its scan got returns in.
+std::vector<ScannerView> views_of(const PreparedCloud& cloud, const ScannerView& limits);
 // --max-range, --min-range, --elevation-min, --elevation-max.
 void add_scanner_limit_options(CLI::App& cmd, ScannerView& limits);
 // min < max for range and elevation; throws std::invalid_argument naming the options.

@@ -160,6 +160,7 @@ void run_map_nbv(const MapNbvOptions& o) {
   RobotGeometry geometry;
   geometry.radius = o.robot_radius;
   geometry.scanner_height = height;
+  print_floor_layer_note(geometry, tree->leaf_size());
   NbvParams params;
   params.method = o.method;
   params.candidate_spacing = o.candidate_spacing;
@@ -215,10 +216,7 @@ void run_map_nbv(const MapNbvOptions& o) {
                 r.best->position.x, r.best->position.y, r.best->position.z, r.best->score,
                 r.stop_percent,
                 complete ? "below the threshold: the map is complete" : "above the threshold");
-  else if (!r.candidate_report.robot_in_map)
-    std::printf("no feasible next best view: the robot at (%.3f, %.3f) is outside the map\n",
-                robot.x, robot.y);
-  else
+  else  // the robot is in the map: a scanner outside it was refused above
     std::printf(
         "no feasible next best view: of %zu grid points, %zu are not empty space at scanner "
         "height, %zu have an obstacle in their safety cylinder (radius %.2f m) and %zu cannot be "

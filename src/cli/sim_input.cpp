@@ -40,6 +40,12 @@ PreparedCloud scan_scene_at_start(const std::string& scene_path, std::uint64_t s
   out.pre = preprocess(cloud, params);
   const Eigen::Vector3d o = out.pre.transform * s.origin();
   out.scanners.emplace_back(o.x(), o.y(), o.z());
+  Cloud seen;  // the same returns, from the optical centre
+  seen.reserve(cloud.size());
+  for (const auto& p : cloud)
+    seen.push_back(pcl::PointXYZ{float(p.x - s.origin().x()), float(p.y - s.origin().y()),
+                                 float(p.z - s.origin().z())});
+  out.returns.push_back(return_directions(seen, out.pre.transform.linear()));
   std::printf("preprocess: floor σ %.1f mm, ceiling at %.3f m, %zu → %zu points [%.2f s]\n",
               1000 * out.pre.floor.sigma, out.pre.ceiling_height, out.pre.input_points,
               out.pre.output_points,

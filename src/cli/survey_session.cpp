@@ -114,6 +114,15 @@ void apply_planning_options(const PlanningOptions& o, SessionParams& p, bool hom
 
 SurveySession::SurveySession(const SessionParams& params) : params_(params), map_(params.map) {
   clear_previous_survey(params_.out);
+  print_floor_layer_note(params_.robot, params_.map.grid.leaf);
+}
+
+void print_floor_layer_note(const RobotGeometry& robot, double leaf) {
+  if (floor_layer_clearance(robot, leaf) > robot.ground_clearance)
+    std::printf(
+        "note: leaves of %.3f m are coarser than the robot's ground clearance (%.3f m): the "
+        "safety cylinder drives over whatever lies in the floor's leaf layer\n",
+        leaf, robot.ground_clearance);
 }
 
 void clear_previous_survey(const std::string& dir) {
@@ -224,7 +233,9 @@ ScanOutcome SurveySession::add_scan(const IncomingScan& in,
   const Point3 scanner(o.x(), o.y(), o.z());
 
   // Stages 3-5 (8 for later scans): occupancy, openings, occlusion.
-  const ScanUpdateReport up = map_.add_scan(*out.registered, scanner, pre.ceiling_height);
+  const ScanUpdateReport up =
+      map_.add_scan(*out.registered, scanner, pre.ceiling_height,
+                    return_directions(*seen, out.scanner_to_survey.linear()));
   seconds["occupancy"] = up.seconds_occupancy;
   seconds["openings"] = up.seconds_openings;
   seconds["occlusion"] = up.seconds_occlusion;

@@ -94,6 +94,10 @@ nlohmann::json octants_json(const SemiOcTree& tree, nlohmann::json& volume_perce
 nlohmann::json pose_json(const Eigen::Isometry3d& scanner_to_survey);
 double yaw_deg_of(const Eigen::Isometry3d& pose);
 
+// Says so when the leaf is coarser than the robot's ground clearance (obstacles in the
+// floor's leaf layer are then driven over, see floor_layer_clearance).
+void print_floor_layer_note(const RobotGeometry& robot, double leaf);
+
 // Removes survey.json and the scan_NN/ folders an earlier run left in `dir`
 // (nothing else); SurveySession does it when it starts.
 void clear_previous_survey(const std::string& dir);
