@@ -1,48 +1,78 @@
 #include "semioctree/occlusion.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <memory>
+#include <optional>
+#include <unordered_set>
 
 #include "parallel_for.h"
 #include "semioctree/octomap_ext/packed_key_map.h"
 
 namespace semioctree {
 
-ReturnDirections::ReturnDirections()
-    : bins_(std::size_t(kAzimuthBins) * std::size_t(kElevationBins), 0) {}
+namespace {
 
-std::size_t ReturnDirections::bin_of(double dx, double dy, double dz) {
-  const double az = std::atan2(dy, dx) * (180.0 / M_PI) + 180.0;                 // [0, 360]
-  const double el = std::atan2(dz, std::hypot(dx, dy)) * (180.0 / M_PI) + 90.0;  // [0, 180]
-  const int a = std::clamp(int(az), 0, kAzimuthBins - 1);
-  const int e = std::clamp(int(el), 0, kElevationBins - 1);
-  return std::size_t(e) * kAzimuthBins + std::size_t(a);
+// The bins of ReturnDirections: 180 rows of 1° of elevation, row r holding about
+// 360 cos(elevation) bins of azimuth (at least one).
+struct DirectionBins {
+  static constexpr int kRows = 180;
+  std::array<int, kRows> count{}, first{};
+  int total = 0;
+  DirectionBins() {
+    for (int r = 0; r < kRows; ++r) {
+      const double el = (r + 0.5 - 90.0) * M_PI / 180.0;
+      count[r] = std::max(1, int(std::lround(360.0 * std::cos(el))));
+      first[r] = total;
+      total += count[r];
+    }
+  }
+  int row_of(double dx, double dy, double dz) const {
+    const double el = std::atan2(dz, std::hypot(dx, dy)) * (180.0 / M_PI) + 90.0;  // [0, 180]
+    return std::clamp(int(el), 0, kRows - 1);
+  }
+  // The bin of row r holding azimuth fraction f ∈ [0, 1] (of the full turn from −180°).
+  int column(int r, double f) const { return std::clamp(int(f * count[r]), 0, count[r] - 1); }
+  static double fraction(double dx, double dy) { return (std::atan2(dy, dx) + M_PI) / (2 * M_PI); }
+};
+
+const DirectionBins& direction_bins() {
+  static const DirectionBins bins;
+  return bins;
 }
 
+}  // namespace
+
+ReturnDirections::ReturnDirections() : bins_(std::size_t(direction_bins().total), 0) {}
+
 void ReturnDirections::add(const Eigen::Vector3d& d) {
-  if (d.x() == 0 && d.y() == 0 && d.z() == 0) return;
-  bins_[bin_of(d.x(), d.y(), d.z())] = 1;
+  if (!d.allFinite() || (d.x() == 0 && d.y() == 0 && d.z() == 0)) return;
+  const DirectionBins& b = direction_bins();
+  const int r = b.row_of(d.x(), d.y(), d.z());
+  bins_[std::size_t(b.first[r] + b.column(r, DirectionBins::fraction(d.x(), d.y())))] = 1;
 }
 
 void ReturnDirections::close_gaps() {
+  const DirectionBins& b = direction_bins();
   std::vector<std::uint8_t> grown(bins_);
-  for (int e = 0; e < kElevationBins; ++e)
-    for (int a = 0; a < kAzimuthBins; ++a) {
-      if (!bins_[std::size_t(e) * kAzimuthBins + a]) continue;
-      for (int de = -1; de <= 1; ++de) {
-        const int ee = e + de;
-        if (ee < 0 || ee >= kElevationBins) continue;
-        for (int da = -1; da <= 1; ++da) {
-          const int aa = (a + da + kAzimuthBins) % kAzimuthBins;  // azimuth wraps around
-          grown[std::size_t(ee) * kAzimuthBins + aa] = 1;
-        }
+  for (int r = 0; r < DirectionBins::kRows; ++r)
+    for (int i = 0; i < b.count[r]; ++i) {
+      if (!bins_[std::size_t(b.first[r] + i)]) continue;
+      const double f = (i + 0.5) / b.count[r];  // the bin's centre azimuth
+      for (int rr = std::max(0, r - 1); rr <= std::min(DirectionBins::kRows - 1, r + 1); ++rr) {
+        const int n = b.count[rr], j = b.column(rr, f);
+        for (int dj = -1; dj <= 1; ++dj)  // azimuth wraps around
+          grown[std::size_t(b.first[rr] + (j + dj + n) % n)] = 1;
       }
     }
   bins_.swap(grown);
 }
 
 bool ReturnDirections::has(double dx, double dy, double dz) const {
-  return bins_[bin_of(dx, dy, dz)] != 0;
+  const DirectionBins& b = direction_bins();
+  const int r = b.row_of(dx, dy, dz);
+  return bins_[std::size_t(b.first[r] + b.column(r, DirectionBins::fraction(dx, dy)))] != 0;
 }
 
 std::size_t ReturnDirections::bins_with_returns() const {
@@ -52,51 +82,87 @@ std::size_t ReturnDirections::bins_with_returns() const {
 std::shared_ptr<const ReturnDirections> return_directions(const Cloud& scan,
                                                           const Eigen::Matrix3d& scanner_to_map) {
   auto r = std::make_shared<ReturnDirections>();
-  for (const auto& p : scan) {
-    const Eigen::Vector3d d(p.x, p.y, p.z);
-    if (d.allFinite()) r->add(scanner_to_map * d);
-  }
+  for (const auto& p : scan) r->add(scanner_to_map * Eigen::Vector3d(p.x, p.y, p.z));
   r->close_gaps();
   return r;
 }
 
 namespace {
 
-// Per-view constants: the elevation limits as bounds on dz / range, so that a
-// segment needs no trigonometry.
 // A scan taken in a doorway (as surveyors do to link rooms) stands in the door:
-// that door is where it stands, not one it looks through, so the door's leaves
-// do not make what it sees `out` (counted, everything that scan alone saw, on
+// that door is where it stands, not one it looks through, so its leaves do not
+// make what the scan sees `out` (counted, everything that scan alone saw, on
 // either side, was out). A view stands in a door when a door leaf lies within
-// kDoorwayReach of its optical centre; it then ignores the door leaves within
-// kOwnDoorReach of it (a door is at most 2.5 m wide and 2.6 m high), however
-// obliquely its lines cross them. Windows do not count: nobody scans from one.
+// kDoorwayReach of its optical centre; that door is those leaves and the door
+// leaves connected to them, and only they are exempt: another door seen from
+// the doorway still leads out. Windows do not count: nobody scans from one.
 constexpr double kDoorwayReach = 0.3;  // m
-constexpr double kOwnDoorReach = 3.0;  // m
+// A door is at most 2.5 × 2.6 m; a region of door leaves far larger than that
+// at the finest leaf is not one door, and the search stops there.
+constexpr std::size_t kMaxDoorCells = 200000;
 
-bool stands_in_a_door(const SemiOcTree& tree, const Point3& c) {
+// Door octants (min-corner key and level, packed) of the door the view stands in.
+using DoorSet = std::unordered_set<std::uint64_t>;
+
+std::uint64_t pack_octant(const octomap::OcTreeKey& k, unsigned level) {
+  return (std::uint64_t(level) << 48) | (std::uint64_t(k[0]) << 32) | (std::uint64_t(k[1]) << 16) |
+         std::uint64_t(k[2]);
+}
+
+DoorSet own_door(const SemiOcTree& tree, const Point3& c) {
+  DoorSet door;
   const double r = tree.leaf_size();
+  octomap::OcTreeKey centre;
+  if (!tree.key_of(c, centre)) return door;
+  auto door_at = [&](const octomap::OcTreeKey& k) -> std::optional<Octant> {
+    const std::optional<Octant> o = tree.find_octant(k);
+    if (o && o->label() == Label::kDoor) return o;
+    return std::nullopt;
+  };
+  // Leaf cells (keys) to visit, seeded with the door leaves within reach.
+  std::vector<octomap::OcTreeKey> todo;
+  octomap::KeySet seen;
   const int n = int(std::ceil(kDoorwayReach / r)) + 1;
   for (int i = -n; i <= n; ++i)
     for (int j = -n; j <= n; ++j)
       for (int k = -n; k <= n; ++k) {
-        const std::optional<Octant> o =
-            tree.find_octant(Point3(c.x + i * r, c.y + j * r, c.z + k * r));
-        if (!o || o->label() != Label::kDoor) continue;
-        // Distance from the optical centre to the leaf's box.
+        const octomap::OcTreeKey q(centre[0] + i, centre[1] + j, centre[2] + k);
+        const std::optional<Octant> o = door_at(q);
+        if (!o) continue;
+        // Distance from the optical centre to the door octant's box.
         const double h = o->size / 2;
         const double dx = std::max(0.0, std::abs(c.x - o->center.x) - h);
         const double dy = std::max(0.0, std::abs(c.y - o->center.y) - h);
         const double dz = std::max(0.0, std::abs(c.z - o->center.z) - h);
-        if (dx * dx + dy * dy + dz * dz <= kDoorwayReach * kDoorwayReach) return true;
+        if (dx * dx + dy * dy + dz * dz <= kDoorwayReach * kDoorwayReach && seen.insert(q).second)
+          todo.push_back(q);
       }
-  return false;
+  // The connected door leaves (26-neighbours), at leaf resolution.
+  while (!todo.empty() && seen.size() < kMaxDoorCells) {
+    const octomap::OcTreeKey q = todo.back();
+    todo.pop_back();
+    const std::optional<Octant> o = door_at(q);
+    if (!o) continue;
+    door.insert(pack_octant(o->key, o->level));
+    for (int i = -1; i <= 1; ++i)
+      for (int j = -1; j <= 1; ++j)
+        for (int k = -1; k <= 1; ++k) {
+          const octomap::OcTreeKey m(q[0] + i, q[1] + j, q[2] + k);
+          if (!seen.count(m) && door_at(m)) {
+            seen.insert(m);
+            todo.push_back(m);
+          }
+        }
+  }
+  return door;
 }
 
+// Per-view constants: the elevation limits as bounds on dz / range, so that a
+// segment needs no trigonometry, and the door the view stands in (if any).
 struct ViewLimits {
   const ScannerView* view;
   double min_range2, max_range2, sin_min, sin_max;
-  bool in_doorway;
+  std::shared_ptr<const DoorSet> own_door;  // empty: the view stands in no door
 };
 
 ViewLimits limits_of(const SemiOcTree& tree, const ScannerView& v) {
@@ -106,7 +172,7 @@ ViewLimits limits_of(const SemiOcTree& tree, const ScannerView& v) {
           v.max_range * v.max_range,
           sine(v.elevation_min_deg),
           sine(v.elevation_max_deg),
-          stands_in_a_door(tree, v.position)};
+          std::make_shared<const DoorSet>(own_door(tree, v.position))};
 }
 
 // Occupied octants entered at the very end of a segment only touch its end
@@ -134,9 +200,8 @@ Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, con
       blocked = true;
       return false;
     }
-    through_opening |=
-        l == Label::kWindow ||
-        (l == Label::kDoor && !(lim.in_doorway && s.t_enter * range < kOwnDoorReach));
+    through_opening |= l == Label::kWindow ||
+                       (l == Label::kDoor && !lim.own_door->count(pack_octant(s.key, s.level)));
     return true;
   };
   if (kMarked)

@@ -286,6 +286,32 @@ TEST(Occlusion, ScanFromADoorwaySeesBothSidesDirectly) {
   EXPECT_EQ(label_at(*tree, Point3(3.0, 3.0, 1.5)), Label::kOut);
 }
 
+// A corridor between two walls (x = 2 and x = 4), each with a door at y 1.5–2.5: a scan
+// standing in the first door sees the corridor and its own room directly, but the room
+// beyond the second door through that door: out.
+TEST(Occlusion, ScanFromADoorwayStillLooksThroughTheOtherDoors) {
+  Cloud c;
+  for (const float x : {2.01f, 4.01f})
+    for (double y = 0; y < 4; y += 0.02)
+      for (double z = 0.02; z < 2.4; z += 0.02)
+        if (!(y >= 1.5 && y < 2.5 && z < 2.0)) c.push_back(pcl::PointXYZ{x, float(y), float(z)});
+  c.push_back(pcl::PointXYZ{0.01f, 0.01f, 0.01f});
+  c.push_back(pcl::PointXYZ{6.39f, 3.99f, 0.01f});
+  const auto tree = discretize(c, 2.4, {0.05, 0.8});
+  for (const double x : {2.025, 4.025})
+    for (double y = 1.525; y < 2.5; y += 0.05)
+      for (double z = 0.025; z < 2.0; z += 0.05) {
+        octomap::OcTreeKey k;
+        tree->key_of({x, y, z}, k);
+        tree->set_label(k, tree->coarse_level(), Label::kDoor);
+      }
+  study_occlusion(*tree, {ScannerView{Point3(2.15, 2.0, 1.2)}});
+  EXPECT_EQ(label_at(*tree, Point3(1.0, 1.4, 1.0)), Label::kEmpty);  // its own room
+  EXPECT_EQ(label_at(*tree, Point3(3.0, 2.0, 1.0)), Label::kEmpty);  // the corridor
+  EXPECT_EQ(label_at(*tree, Point3(5.0, 2.0, 1.0)), Label::kOut);    // beyond the other door
+  EXPECT_EQ(label_at(*tree, Point3(5.5, 2.2, 1.5)), Label::kOut);
+}
+
 TEST(Occlusion, ReturnDirectionsAreBinnedByDegreeAndTheirGapsClosed) {
   ReturnDirections r;
   r.add(Eigen::Vector3d::Zero());  // no direction
@@ -309,6 +335,19 @@ TEST(Occlusion, ReturnDirectionsAreBinnedByDegreeAndTheirGapsClosed) {
   EXPECT_FALSE(has(deg(2.5, 0)));
   EXPECT_FALSE(has(deg(0.5, 2.5)));
   EXPECT_EQ(r.bins_with_returns(), 18u);  // two blocks of 3 × 3 bins
+
+  // Towards the zenith the bins widen in azimuth (each about 1° × 1°): a scan that is
+  // 0.9° apart there (10° of azimuth at 85° of elevation) leaves no gap, and one return
+  // near the zenith covers it.
+  ReturnDirections sparse;
+  for (double a = -180; a < 180; a += 10) sparse.add(deg(a, 85.2));
+  sparse.add(deg(120, 89.7));
+  sparse.close_gaps();
+  for (double a = -175; a < 180; a += 10)
+    EXPECT_TRUE(sparse.has(deg(a, 85.2).x(), deg(a, 85.2).y(), deg(a, 85.2).z())) << a;
+  EXPECT_TRUE(sparse.has(0, 0, 1));
+  EXPECT_FALSE(sparse.has(1, 0, 0));
+  EXPECT_FALSE(sparse.has(deg(30, 80).x(), deg(30, 80).y(), deg(30, 80).z()));
 }
 
 // A wall 0.4 m from the scanner: the scanner drops the returns nearer than its minimum

@@ -21,26 +21,28 @@
 namespace semioctree {
 
 // The directions in which a scan got returns, seen from its optical centre in the map
-// frame, on a grid of 1° × 1° azimuth × elevation bins. A surface nearer than the
-// scanner's minimum range gives none (the scanner drops them), so the map holds no
-// occupied leaves there: without this the study's lines passed through it (a scan taken
-// in a doorway saw through its jambs into the wall and beyond). A line in a direction
-// without returns is hidden. Bins of 1° with their neighbours (close_gaps) tolerate
-// scans as sparse as about 1°; a hole in the returns must span a few degrees to count.
+// frame: rows of 1° of elevation, each cut into bins about 1° wide (fewer towards the
+// poles, so that every bin spans about 1° × 1° and a sparse scan fills the rows near
+// the zenith too). A surface nearer than the scanner's minimum range gives no returns
+// (the scanner drops them), so the map holds no occupied leaves there: without this the
+// study's lines passed through it (a scan taken in a doorway saw through its jambs into
+// the wall and beyond). A line in a direction without returns is hidden. With their
+// neighbours (close_gaps) the bins tolerate scans as sparse as about 1°; a hole in the
+// returns must span a few degrees to count.
 class ReturnDirections {
  public:
-  static constexpr int kAzimuthBins = 360, kElevationBins = 180;
   ReturnDirections();
-  // `d`: from the optical centre, map frame, any length > 0 (a zero vector is ignored).
+  // `d`: from the optical centre, map frame, any length > 0 (a zero or non-finite
+  // vector is ignored).
   void add(const Eigen::Vector3d& d);
-  // After the last add: a bin next to one with returns counts as having them, so that
-  // a bin the scan's angular step happens to skip is no hole.
+  // After the last add: a bin next to one with returns (in its row or the rows above
+  // and below) counts as having them, so that a bin the scan's angular step happens to
+  // skip is no hole.
   void close_gaps();
   bool has(double dx, double dy, double dz) const;
   std::size_t bins_with_returns() const;
 
  private:
-  static std::size_t bin_of(double dx, double dy, double dz);
   std::vector<std::uint8_t> bins_;
 };
 
@@ -106,7 +108,9 @@ struct OcclusionReport {
 std::vector<ScannerView> scanner_views(const std::vector<Point3>& positions,
                                        const ScannerView& limits);
 
-// How well `p` is seen from the best of `views`.
+// How well `p` is seen from the best of `views`. Each call first looks around every
+// view for a door it stands in (a few thousand look-ups): for many points, use
+// study_occlusion.
 Visibility point_visibility(const SemiOcTree& tree, const std::vector<ScannerView>& views,
                             const Point3& p);
 
