@@ -162,7 +162,7 @@ DoorSet own_door(const SemiOcTree& tree, const Point3& c) {
 struct ViewLimits {
   const ScannerView* view;
   double min_range2, max_range2, sin_min, sin_max;
-  std::shared_ptr<const DoorSet> own_door;  // empty: the view stands in no door
+  DoorSet own_door;  // empty: the view stands in no door
 };
 
 ViewLimits limits_of(const SemiOcTree& tree, const ScannerView& v) {
@@ -172,7 +172,7 @@ ViewLimits limits_of(const SemiOcTree& tree, const ScannerView& v) {
           v.max_range * v.max_range,
           sine(v.elevation_min_deg),
           sine(v.elevation_max_deg),
-          std::make_shared<const DoorSet>(own_door(tree, v.position))};
+          own_door(tree, v.position)};
 }
 
 // Occupied octants entered at the very end of a segment only touch its end
@@ -201,7 +201,7 @@ Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, con
       return false;
     }
     through_opening |= l == Label::kWindow ||
-                       (l == Label::kDoor && !lim.own_door->count(pack_octant(s.key, s.level)));
+                       (l == Label::kDoor && !lim.own_door.count(pack_octant(s.key, s.level)));
     return true;
   };
   if (kMarked)
@@ -304,10 +304,14 @@ int samples_of(const Candidate& c, unsigned coarse_level, LatticePoint out[9]) {
 
 }  // namespace
 
-std::vector<ScannerView> scanner_views(const std::vector<Point3>& positions,
-                                       const ScannerView& limits) {
+std::vector<ScannerView> scanner_views(
+    const std::vector<Point3>& positions, const ScannerView& limits,
+    const std::vector<std::shared_ptr<const ReturnDirections>>& returns) {
   std::vector<ScannerView> out(positions.size(), limits);
-  for (std::size_t i = 0; i < positions.size(); ++i) out[i].position = positions[i];
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    out[i].position = positions[i];
+    out[i].returns = i < returns.size() ? returns[i] : nullptr;
+  }
   return out;
 }
 

@@ -43,9 +43,7 @@ SurveyMap::SurveyMap(const SurveyMapParams& params) : params_(params), merged_(n
 }
 
 std::vector<ScannerView> SurveyMap::views() const {
-  std::vector<ScannerView> v = scanner_views(scanners_, params_.limits);
-  for (std::size_t i = 0; i < v.size(); ++i) v[i].returns = returns_[i];
-  return v;
+  return scanner_views(scanners_, params_.limits, returns_);
 }
 
 namespace {

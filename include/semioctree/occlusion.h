@@ -104,9 +104,11 @@ struct OcclusionReport {
 };
 
 // One view per scanner position, each with the range and elevation limits of `limits`
-// (its position ignored).
-std::vector<ScannerView> scanner_views(const std::vector<Point3>& positions,
-                                       const ScannerView& limits);
+// (its position and returns ignored), and the directions its scan got returns in:
+// `returns[i]` for position i (none given: every direction).
+std::vector<ScannerView> scanner_views(
+    const std::vector<Point3>& positions, const ScannerView& limits,
+    const std::vector<std::shared_ptr<const ReturnDirections>>& returns = {});
 
 // How well `p` is seen from the best of `views`. Each call first looks around every
 // view for a door it stands in (a few thousand look-ups): for many points, use

@@ -76,13 +76,6 @@ PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& param
   return out;
 }
 
-std::vector<ScannerView> views_of(const PreparedCloud& cloud, const ScannerView& limits) {
-  std::vector<ScannerView> views = scanner_views(cloud.scanners, limits);
-  for (std::size_t i = 0; i < views.size() && i < cloud.returns.size(); ++i)
-    views[i].returns = cloud.returns[i];
-  return views;
-}
-
 void add_scan_source_options(CLI::App& cmd, ScanSource& src, const std::string& pose_help) {
   auto* cloud_opt =
       cmd.add_option("--cloud", src.input.files,

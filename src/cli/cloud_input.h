@@ -52,8 +52,6 @@ void add_scan_source_options(CLI::App& cmd, ScanSource& src, const std::string& 
 // --cloud nor --scene was given.
 PreparedCloud prepare(const ScanSource& src, const std::string& command,
                       const ScannerView* limits = nullptr);
-// One view per scanner of `cloud`, with `limits` and the directions its scan got returns in.
-std::vector<ScannerView> views_of(const PreparedCloud& cloud, const ScannerView& limits);
 // --max-range, --min-range, --elevation-min, --elevation-max.
 void add_scanner_limit_options(CLI::App& cmd, ScannerView& limits);
 // min < max for range and elevation; throws std::invalid_argument naming the options.

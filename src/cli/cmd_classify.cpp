@@ -64,7 +64,8 @@ void add_classify_command(CLI::App& app) {
       std::printf("  %-6s %.2f x %.2f m, sill %.2f m, line of sight %.0f %%\n", to_string(op.kind),
                   op.width, op.height, op.sill, 100 * op.los_fraction);
     t0 = std::chrono::steady_clock::now();
-    const OcclusionReport rep = study_occlusion(*tree, views_of(cloud, o->limits));
+    const OcclusionReport rep =
+        study_occlusion(*tree, scanner_views(cloud.scanners, o->limits, cloud.returns));
     tree->compact();
     const DiscretizationRun run = describe_run(
         *tree, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());

@@ -62,7 +62,7 @@ void add_compare_command(CLI::App& app) {
         // Table 1 needs every class: doors and windows, then the occlusion study.
         label_openings(*tree, detect_openings(*cloud.pre.cloud, cloud.pre.ceiling_height, *tree,
                                               cloud.scanners));
-        study_occlusion(*tree, views_of(cloud, o->limits));
+        study_occlusion(*tree, scanner_views(cloud.scanners, o->limits, cloud.returns));
         DiscretizationRun run = describe_run(
             *tree, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
         run.method = method;  // k = 0 at the coarsest leaf would read as homogeneous
