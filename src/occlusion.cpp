@@ -35,6 +35,12 @@ struct DirectionBins {
   // The bin of row r holding azimuth fraction f ∈ [0, 1] (of the full turn from −180°).
   int column(int r, double f) const { return std::clamp(int(f * count[r]), 0, count[r] - 1); }
   static double fraction(double dx, double dy) { return (std::atan2(dy, dx) + M_PI) / (2 * M_PI); }
+  // The centre direction of bin i of row r (unit length).
+  Eigen::Vector3d centre(int r, int i) const {
+    const double el = (r + 0.5 - 90.0) * M_PI / 180.0;
+    const double az = -M_PI + 2 * M_PI * (i + 0.5) / count[r];
+    return {std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)};
+  }
 };
 
 const DirectionBins& direction_bins() {
@@ -85,6 +91,49 @@ std::shared_ptr<const ReturnDirections> return_directions(const Cloud& scan,
   for (const auto& p : scan) r->add(scanner_to_map * Eigen::Vector3d(p.x, p.y, p.z));
   r->close_gaps();
   return r;
+}
+
+std::shared_ptr<const ReturnDirections> return_directions_in_map(const octomap::OcTree& map,
+                                                                 const Point3& optical_centre,
+                                                                 const ScannerView& limits,
+                                                                 unsigned threads,
+                                                                 MapReturnsReport* report) {
+  MapReturnsReport rep;
+  auto out = std::make_shared<ReturnDirections>();
+  const octomap::point3d origin(float(optical_centre.x), float(optical_centre.y),
+                                float(optical_centre.z));
+  const octomap::OcTreeNode* own = map.search(origin);
+  rep.origin_free = own && !map.isNodeOccupied(own);
+  const DirectionBins& b = direction_bins();
+  // Rows overlapping the elevation limits (a row is 1°, from −90°).
+  const int row_lo = std::clamp(int(std::floor(limits.elevation_min_deg + 90.0)), 0, b.kRows - 1);
+  const int row_hi =
+      std::clamp(int(std::ceil(limits.elevation_max_deg + 90.0)) - 1, 0, b.kRows - 1);
+  std::vector<std::uint8_t> reached(std::size_t(b.total), 0);
+  if (rep.origin_free && row_lo <= row_hi) {
+    detail::parallel_for(std::size_t(row_hi - row_lo + 1), detail::thread_count(threads), 1,
+                         [&](std::size_t k, unsigned) {
+                           const int r = row_lo + int(k);
+                           for (int i = 0; i < b.count[r]; ++i) {
+                             const Eigen::Vector3f d = b.centre(r, i).cast<float>();
+                             octomap::point3d end;
+                             if (map.castRay(origin, octomap::point3d(d.x(), d.y(), d.z()), end,
+                                             false, limits.max_range))
+                               reached[std::size_t(b.first[r] + i)] = 1;
+                           }
+                         });
+  }
+  for (int r = row_lo; r <= row_hi; ++r) {
+    rep.bins_tested += std::size_t(b.count[r]);
+    for (int i = 0; i < b.count[r]; ++i) {
+      if (!reached[std::size_t(b.first[r] + i)]) continue;
+      ++rep.bins_reached;
+      out->add(b.centre(r, i));
+    }
+  }
+  out->close_gaps();
+  if (report) *report = rep;
+  return out;
 }
 
 namespace {

@@ -203,6 +203,9 @@ TEST(Cli, MapNbvTakesAnOctomapMapOrASemioctree) {
   const CliRun r =
       run_cli("map-nbv --map " + bt + " --scanner 3,2.5,1.5 --out " + (dir / "out").string());
   ASSERT_EQ(r.exit_code, 0) << r.all();
+  // The map was made by casting the scan's rays: it tells where they got returns.
+  EXPECT_NE(r.all().find("from the rays the map carved: 1 of 1 scanner"), std::string::npos)
+      << r.all();
   std::ifstream in(dir / "out" / "nbv.json");
   const auto j = nlohmann::json::parse(in);
   EXPECT_EQ(j["format"], "semioctree-map-nbv");
@@ -231,6 +234,19 @@ TEST(Cli, MapNbvTakesAnOctomapMapOrASemioctree) {
   ASSERT_FALSE(k["nbv"].is_null());
   EXPECT_DOUBLE_EQ(k["nbv"]["x"].get<double>(), nx);
   EXPECT_DOUBLE_EQ(k["nbv"]["y"].get<double>(), ny);
+
+  // A map of the points alone holds no free space: no directions, and it says so.
+  octomap::OcTree points_only(0.05);
+  for (const auto& p : scan) points_only.updateNode(p, true);
+  const std::string pbt = (dir / "points.bt").string();
+  ASSERT_TRUE(points_only.writeBinary(pbt));
+  const CliRun p =
+      run_cli("map-nbv --map " + pbt + " --scanner 3,2.5,1.5 --candidate-spacing 1 --out " +
+              (dir / "points").string());
+  EXPECT_EQ(p.exit_code, 0) << p.all();
+  EXPECT_NE(p.all().find("does not hold its position as free space"), std::string::npos) << p.all();
+  EXPECT_NE(p.all().find("from the rays the map carved: 0 of 1 scanner"), std::string::npos)
+      << p.all();
 
   // Errors name what is wrong.
   const CliRun coarse = run_cli("map-nbv --map " + bt + " --scanner 3,2.5,1.5 --coarse 0.7 --out " +

@@ -2,6 +2,7 @@
 // space seen through a door is out, a second scanner position un-occludes
 // what it sees, coarse space stays coarse.
 #include <gtest/gtest.h>
+#include <octomap/OcTree.h>
 
 #include <cmath>
 #include <memory>
@@ -384,6 +385,64 @@ TEST(Occlusion, SurfaceNearerThanTheMinimumRangeStillHides) {
   EXPECT_EQ(label_at(*tree, Point3(4.3, 1.6, 0.9)), Label::kOccluded);
   EXPECT_EQ(label_at(*tree, room), Label::kEmpty);
   EXPECT_EQ(label_at(*tree, Point3(2.0, 3.0, 1.4)), Label::kEmpty);  // returns from y = 4
+}
+
+// The same wall 0.4 m from the scanner, in an OctoMap map made by casting the scan's rays
+// (insertPointCloud), as map-nbv reads one: the directions with returns are those whose
+// ray, through the free space the map holds, reaches an occupied leaf. Towards the hole
+// the map holds nothing, so the space behind it stays hidden.
+TEST(Occlusion, ReturnDirectionsAreReadFromTheRaysAMapCarved) {
+  const Point3 scanner(3.6, 2.0, 1.2);
+  Cloud world;
+  octomap::Pointcloud rays;
+  auto add = [&](double x, double y, double z) {
+    const double dx = x - scanner.x, dy = y - scanner.y, dz = z - scanner.z;
+    if (dx * dx + dy * dy + dz * dz < 0.6 * 0.6) return;  // dropped by the scanner
+    world.push_back(pcl::PointXYZ{float(x), float(y), float(z)});
+    rays.push_back(float(x), float(y), float(z));
+  };
+  for (double u = 0.01; u < 4; u += 0.02)
+    for (double z = 0.01; z < 2.4; z += 0.02) {
+      add(0.01, u, z), add(3.99, u, z);
+      add(u, 0.01, z), add(u, 3.99, z);
+    }
+  add(5.9, 5.9, 0.01);
+  octomap::OcTree map(0.05);
+  map.insertPointCloud(rays,
+                       octomap::point3d(float(scanner.x), float(scanner.y), float(scanner.z)));
+
+  MapReturnsReport rep;
+  const auto returns = return_directions_in_map(map, scanner, ScannerView{}, 2, &rep);
+  ASSERT_TRUE(returns);
+  EXPECT_TRUE(rep.origin_free);
+  // Bins of 1° from −60° to 90° of elevation: (1 + sin 60°)/2 of the sphere's 41 253.
+  EXPECT_GT(rep.bins_tested, 37000u);
+  EXPECT_LT(rep.bins_tested, 40000u);
+  EXPECT_GT(rep.bins_reached, 0u);
+  EXPECT_FALSE(returns->has(1, 0, 0));      // the hole, 0.4 m away along +x
+  EXPECT_FALSE(returns->has(1, 0.5, 0.3));  // within the hole's 48° too
+  EXPECT_TRUE(returns->has(-1, 0, 0));      // the wall x = 0, 3.6 m away
+  EXPECT_TRUE(returns->has(0, 1, 0.2));     // y = 4
+  EXPECT_TRUE(returns->has(1, 1.2, 0));     // x = 4 beyond the hole, 0.8 m away
+  EXPECT_FALSE(returns->has(0, 0, 1));      // no ceiling was scanned
+  EXPECT_FALSE(returns->has(0.3, 0, -1));   // below −60°: not looked at
+
+  const auto tree = discretize(world, 2.4, {0.05, 0.8});
+  ScannerView view{scanner};
+  view.returns = returns;
+  study_occlusion(*tree, {view});
+  EXPECT_EQ(label_at(*tree, Point3(4.5, 2.0, 1.2)), Label::kOccluded);  // behind the hole
+  EXPECT_EQ(label_at(*tree, Point3(1.0, 2.0, 1.2)), Label::kEmpty);
+  EXPECT_EQ(label_at(*tree, Point3(2.0, 3.0, 1.4)), Label::kEmpty);
+
+  // A map of the points alone (no ray carved free space) says nothing about directions.
+  octomap::OcTree points_only(0.05);
+  for (const auto& p : rays) points_only.updateNode(p, true);
+  MapReturnsReport none;
+  const auto nothing = return_directions_in_map(points_only, scanner, ScannerView{}, 1, &none);
+  EXPECT_FALSE(none.origin_free);
+  EXPECT_EQ(none.bins_reached, 0u);
+  EXPECT_EQ(nothing->bins_with_returns(), 0u);
 }
 
 TEST(Occlusion, RangeAndElevationLimits) {

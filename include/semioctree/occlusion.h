@@ -9,6 +9,8 @@
 // scanner sees it; the scanner's range and elevation limits apply.
 #pragma once
 
+#include <octomap/OcTree.h>
+
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
@@ -64,6 +66,25 @@ struct ScannerView {
   // all a map without its scans, such as an OctoMap map, can say).
   std::shared_ptr<const ReturnDirections> returns;
 };
+
+struct MapReturnsReport {
+  bool origin_free = false;      // the map holds the optical centre's leaf as free
+  std::size_t bins_tested = 0;   // bins within the scanner's elevation limits
+  std::size_t bins_reached = 0;  // of which a ray reached an occupied leaf (before gaps closed)
+};
+
+// The directions in which a scan from `optical_centre` got returns, read from an
+// occupancy map that was built by casting its rays (OctoMap's insertPointCloud, or
+// octomap_server): one ray per bin (its centre direction, within the elevation limits of
+// `limits`), cast with OctoMap's castRay through the space the map holds as free, has
+// returns if it reaches an occupied leaf within max_range; one that meets space the map
+// does not hold got none, since every return would have carved its ray free. A map of
+// several scans may have carved a direction with another scan's rays, which only makes a
+// direction count as having returns (as if no directions were known). A map holding no
+// free space around the optical centre says nothing: see MapReturnsReport.
+std::shared_ptr<const ReturnDirections> return_directions_in_map(
+    const octomap::OcTree& map, const Point3& optical_centre, const ScannerView& limits,
+    unsigned threads = 0, MapReturnsReport* report = nullptr);
 
 enum class Visibility : std::uint8_t { kHidden = 0, kThroughOpening = 1, kDirect = 2 };
 

@@ -53,10 +53,47 @@ nlohmann::json point_json(const Point3& p) {
   return {{"x", p.x}, {"y", p.y}, {"z", p.z}};
 }
 
+// The directions each scanner got returns in, read from the rays the map carved. A
+// scanner whose rays the map does not hold (its leaf is not free, or under half of its
+// directions reach an occupied leaf: a map of points without free space, or one too
+// sparse to follow a ray through) is taken to have got returns everywhere, as before.
+constexpr double kMinDirectionsReached = 0.5;
+std::vector<std::shared_ptr<const ReturnDirections>> returns_from_map(
+    const octomap::OcTree& map, const std::vector<Point3>& scanners, const MapNbvOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<std::shared_ptr<const ReturnDirections>> out;
+  std::size_t used = 0;
+  for (std::size_t i = 0; i < scanners.size(); ++i) {
+    MapReturnsReport rep;
+    auto r = return_directions_in_map(map, scanners[i], o.limits, o.threads, &rep);
+    const double reached =
+        rep.bins_tested ? double(rep.bins_reached) / double(rep.bins_tested) : 0.0;
+    if (!rep.origin_free || reached < kMinDirectionsReached) {
+      const std::string why = rep.origin_free
+                                  ? "only " + std::to_string(int(100 * reached)) +
+                                        " % of its rays reach an occupied leaf through free space"
+                                  : "the map does not hold its position as free space";
+      std::printf(
+          "  scanner %zu: %s, so the directions it got no returns in are not known (a surface "
+          "nearer than its minimum range may look seen through)\n",
+          i + 1, why.c_str());
+      out.push_back(nullptr);
+      continue;
+    }
+    ++used;
+    out.push_back(std::move(r));
+  }
+  std::printf(
+      "directions with returns, from the rays the map carved: %zu of %zu scanner(s) [%.2f s]\n",
+      used, scanners.size(), since(t0));
+  return out;
+}
+
 // An OctoMap map holds no doors or windows: find them as `classify` does, in
 // its occupied leaves, then make the free space seen through them out.
 std::optional<std::vector<DetectedOpening>> find_openings_in_map(
-    SemiOcTree& tree, const MapNbvOptions& o, const std::vector<Point3>& scanners) {
+    SemiOcTree& tree, const MapNbvOptions& o, const std::vector<Point3>& scanners,
+    const std::vector<std::shared_ptr<const ReturnDirections>>& returns) {
   if (o.skip_openings) return std::nullopt;
   const auto t0 = std::chrono::steady_clock::now();
   const std::optional<double> ceiling =
@@ -83,7 +120,8 @@ std::optional<std::vector<DetectedOpening>> find_openings_in_map(
     OcclusionParams op;
     op.scope = OcclusionScope::kFreeThroughOpenings;
     op.threads = o.threads;
-    const OcclusionReport occ = study_occlusion(tree, scanner_views(scanners, o.limits), op);
+    const OcclusionReport occ =
+        study_occlusion(tree, scanner_views(scanners, o.limits, returns), op);
     std::printf("  free space seen through them is out of the room: %zu octants\n", occ.out);
   }
   return found;
@@ -108,7 +146,8 @@ void run_map_nbv(const MapNbvOptions& o) {
   // The map: a SemiOcTree as it is, an OctoMap occupancy map imported.
   TreeFile file = read_tree_file(o.map);
   std::unique_ptr<SemiOcTree> tree;
-  std::optional<std::vector<DetectedOpening>> openings;  // looked for: an OctoMap map
+  std::optional<std::vector<DetectedOpening>> openings;          // looked for: an OctoMap map
+  std::vector<std::shared_ptr<const ReturnDirections>> returns;  // per scanner; none: any
   if (auto* semi = dynamic_cast<SemiOcTree*>(file.tree.get())) {
     file.tree.release();
     tree.reset(semi);
@@ -132,11 +171,12 @@ void run_map_nbv(const MapNbvOptions& o) {
         "voxels (%zu occupied leaves) [%.2f s]\n",
         o.map.c_str(), file.binary ? "occupancy map (.bt)" : file.type.c_str(), res, rep.map_leaves,
         rep.coarse_voxels, rep.occupied_leaves, since(t0));
+    returns = returns_from_map(*occupancy, scanners, o);
     if (unobserved == Label::kUnknown) {
       // Space the map does not hold: seen from a scanner (then empty: nothing returned
       // there) or hidden (occluded), as the occlusion study decides.
       const auto t1 = std::chrono::steady_clock::now();
-      const std::vector<ScannerView> views = scanner_views(scanners, o.limits);
+      const std::vector<ScannerView> views = scanner_views(scanners, o.limits, returns);
       OcclusionParams op;
       op.scope = OcclusionScope::kUnknown;
       op.threads = o.threads;
@@ -146,7 +186,7 @@ void run_map_nbv(const MapNbvOptions& o) {
           "occluded, %zu out [%.2f s]\n",
           views.size(), occ.empty, occ.occluded, occ.out, since(t1));
     }
-    openings = find_openings_in_map(*tree, o, scanners);
+    openings = find_openings_in_map(*tree, o, scanners, returns);
   } else {
     throw std::invalid_argument(o.map + ": a " + file.type +
                                 " holds no occupancy (give a .bt, an OcTree .ot or a SemiOcTree "
@@ -237,7 +277,11 @@ void add_map_nbv_command(CLI::App& app) {
       "from octomap_server or any OctoMap tool) or a SemiOcTree .ot. An OctoMap map becomes a "
       "semioctree of the same resolution (its leaf); the space it does not hold is classified "
       "from the scanner positions (seen → empty, hidden → occluded), or all taken as occluded "
-      "(--unobserved occluded). Its doors and windows are found as `classify` finds them, "
+      "(--unobserved occluded). Seen means in a direction the scanner got returns in: one "
+      "whose ray, through the map's free space, reaches an occupied leaf (a surface nearer than "
+      "the minimum range leaves a hole in the map but hides what is behind it); a map without "
+      "free space around a scanner cannot tell, and every direction counts. Its doors and windows "
+      "are found as `classify` finds them, "
       "with its occupied leaves for points (the ceiling: its densest layer of occupied leaves "
       "above 2 m, or --ceiling), and the space seen through them is out of the room. The "
       "map's frame must be levelled with the floor at z = 0. "
