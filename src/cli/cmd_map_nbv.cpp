@@ -3,6 +3,7 @@
 // octomap_server or any OctoMap tool) or one of our SemiOcTree .ot files — without
 // our point-cloud pipeline (DESIGN.md "Drop-in for OctoMap users").
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -14,6 +15,7 @@
 #include "cloud_input.h"
 #include "commands.h"
 #include "option_checks.h"
+#include "progress_line.h"
 #include "semioctree/figures.h"
 #include "semioctree/nbv.h"
 #include "semioctree/occlusion.h"
@@ -63,11 +65,13 @@ std::vector<std::shared_ptr<const ReturnDirections>> returns_from_map(
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<std::shared_ptr<const ReturnDirections>> out;
   std::size_t used = 0;
+  std::string shares;  // per scanner: its rays that reach a surface
   for (std::size_t i = 0; i < scanners.size(); ++i) {
     MapReturnsReport rep;
     auto r = return_directions_in_map(map, scanners[i], o.limits, o.threads, &rep);
     const double reached =
         rep.bins_tested ? double(rep.bins_reached) / double(rep.bins_tested) : 0.0;
+    shares += (i ? ", " : "") + std::to_string(int(std::lround(100 * reached))) + " %";
     if (!rep.origin_free || reached < kMinDirectionsReached) {
       const std::string why = rep.origin_free
                                   ? "only " + std::to_string(int(100 * reached)) +
@@ -84,8 +88,9 @@ std::vector<std::shared_ptr<const ReturnDirections>> returns_from_map(
     out.push_back(std::move(r));
   }
   std::printf(
-      "directions with returns, from the rays the map carved: %zu of %zu scanner(s) [%.2f s]\n",
-      used, scanners.size(), since(t0));
+      "directions with returns, from the rays the map carved: %zu of %zu scanner(s) (rays that "
+      "reach an occupied leaf: %s) [%.2f s]\n",
+      used, scanners.size(), shares.c_str(), since(t0));
   return out;
 }
 
@@ -208,8 +213,11 @@ void run_map_nbv(const MapNbvOptions& o) {
   params.limits = o.limits;
   params.grid_anchor = scanners.front();  // the first scan position, as `survey` does
   const auto t2 = std::chrono::steady_clock::now();
+  CountProgress progress(stdout, "nbv: scored", "candidates");
+  params.progress = progress.callback();
   const NbvResult r =
       next_best_view(*tree, geometry, Point3(robot.x, robot.y, 0.0), scanners, params);
+  progress.finish();
   std::printf("nbv: %zu feasible candidates, %zu occluded targets [%.2f s]\n", r.candidates.size(),
               r.scoring.targets, since(t2));
 

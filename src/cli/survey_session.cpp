@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <mutex>
 
 #include "option_checks.h"
 #include "progress_line.h"
@@ -253,19 +252,8 @@ ScanOutcome SurveySession::add_scan(const IncomingScan& in,
   const Point3 robot = robot_position.value_or(scanner);
   NbvParams nbv_params = params_.nbv;
   nbv_params.grid_anchor = map_.scanners().front();  // see NbvParams::grid_anchor
-  // Scoring usually takes a few seconds; a large map (a real scan seen through
-  // its openings) can take minutes: then say how far it is, every 2 s.
-  ProgressLine progress(stdout);
-  std::mutex progress_mutex;
-  auto last_report = t0;
-  nbv_params.progress = [&](std::size_t done, std::size_t total) {
-    const std::lock_guard<std::mutex> lock(progress_mutex);
-    const auto now = std::chrono::steady_clock::now();
-    if (now - last_report < std::chrono::seconds(2)) return;
-    last_report = now;
-    progress.update("  nbv: scored " + std::to_string(done) + " of " + std::to_string(total) +
-                    " candidates");
-  };
+  CountProgress progress(stdout, "  nbv: scored", "candidates");
+  nbv_params.progress = progress.callback();
   const NbvResult nbv =
       next_best_view(map_.tree(), params_.robot, robot, map_.scanners(), nbv_params);
   progress.finish();
