@@ -11,7 +11,6 @@ if(TARGET semioctree_cli)
   add_dependencies(test_scanner semioctree_cli)
 endif()
 semioctree_add_bench(bench_raycast SOURCES ${PROJECT_SOURCE_DIR}/tests/bench_raycast.cpp LIBS semioctree_sim)
-target_compile_definitions(bench_raycast PRIVATE SEMIOCTREE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 # Shared test helpers (tests/support/).
 foreach(t test_scene test_scanner)
   target_include_directories(${t} PRIVATE ${PROJECT_SOURCE_DIR}/tests)

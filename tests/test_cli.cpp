@@ -241,7 +241,8 @@ TEST(Cli, MapNbvTakesAnOctomapMapOrASemioctree) {
   const std::string pbt = (dir / "points.bt").string();
   ASSERT_TRUE(points_only.writeBinary(pbt));
   const CliRun p =
-      run_cli("map-nbv --map " + pbt + " --scanner 3,2.5,1.5 --candidate-spacing 1 --out " +
+      run_cli("map-nbv --map " + pbt +
+              " --scanner 3,2.5,1.5 --unobserved occluded --candidate-spacing 1 --out " +
               (dir / "points").string());
   EXPECT_EQ(p.exit_code, 0) << p.all();
   EXPECT_NE(p.all().find("does not hold its position as free space"), std::string::npos) << p.all();
