@@ -22,8 +22,7 @@ struct DirectionBins {
   int total = 0;
   DirectionBins() {
     for (int r = 0; r < kRows; ++r) {
-      const double el = (r + 0.5 - 90.0) * M_PI / 180.0;
-      count[r] = std::max(1, int(std::lround(360.0 * std::cos(el))));
+      count[r] = std::max(1, int(std::lround(360.0 * std::cos(row_elevation(r)))));
       first[r] = total;
       total += count[r];
     }
@@ -35,10 +34,12 @@ struct DirectionBins {
   // The bin of row r holding azimuth fraction f ∈ [0, 1] (of the full turn from −180°).
   int column(int r, double f) const { return std::clamp(int(f * count[r]), 0, count[r] - 1); }
   static double fraction(double dx, double dy) { return (std::atan2(dy, dx) + M_PI) / (2 * M_PI); }
+  // The centre elevation of row r (radians), and the centre azimuth fraction of its bin i.
+  static double row_elevation(int r) { return (r + 0.5 - 90.0) * M_PI / 180.0; }
+  double centre_fraction(int r, int i) const { return (i + 0.5) / count[r]; }
   // The centre direction of bin i of row r (unit length).
   Eigen::Vector3d centre(int r, int i) const {
-    const double el = (r + 0.5 - 90.0) * M_PI / 180.0;
-    const double az = -M_PI + 2 * M_PI * (i + 0.5) / count[r];
+    const double el = row_elevation(r), az = -M_PI + 2 * M_PI * centre_fraction(r, i);
     return {std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)};
   }
 };
@@ -65,7 +66,7 @@ void ReturnDirections::close_gaps() {
   for (int r = 0; r < DirectionBins::kRows; ++r)
     for (int i = 0; i < b.count[r]; ++i) {
       if (!bins_[std::size_t(b.first[r] + i)]) continue;
-      const double f = (i + 0.5) / b.count[r];  // the bin's centre azimuth
+      const double f = b.centre_fraction(r, i);
       for (int rr = std::max(0, r - 1); rr <= std::min(DirectionBins::kRows - 1, r + 1); ++rr) {
         const int n = b.count[rr], j = b.column(rr, f);
         for (int dj = -1; dj <= 1; ++dj)  // azimuth wraps around

@@ -71,12 +71,13 @@ std::vector<std::shared_ptr<const ReturnDirections>> returns_from_map(
     auto r = return_directions_in_map(map, scanners[i], o.limits, o.threads, &rep);
     const double reached =
         rep.bins_tested ? double(rep.bins_reached) / double(rep.bins_tested) : 0.0;
-    shares += (i ? ", " : "") + std::to_string(int(std::lround(100 * reached))) + " %";
+    const std::string percent = std::to_string(std::lround(100 * reached)) + " %";
+    shares += (i ? ", " : "") + percent;
     if (!rep.origin_free || reached < kMinDirectionsReached) {
-      const std::string why = rep.origin_free
-                                  ? "only " + std::to_string(int(100 * reached)) +
-                                        " % of its rays reach an occupied leaf through free space"
-                                  : "the map does not hold its position as free space";
+      const std::string why =
+          rep.origin_free
+              ? "only " + percent + " of its rays reach an occupied leaf through free space"
+              : "the map does not hold its position as free space";
       std::printf(
           "  scanner %zu: %s, so the directions it got no returns in are not known (a surface "
           "nearer than its minimum range may look seen through)\n",
@@ -289,8 +290,8 @@ void add_map_nbv_command(CLI::App& app) {
       "whose ray, through the map's free space, reaches an occupied leaf (a surface nearer than "
       "the minimum range leaves a hole in the map but hides what is behind it); a map without "
       "free space around a scanner cannot tell, and every direction counts. Its doors and windows "
-      "are found as `classify` finds them, "
-      "with its occupied leaves for points (the ceiling: its densest layer of occupied leaves "
+      "are found as `classify` finds them, with its occupied leaves for points (the ceiling: its "
+      "densest layer of occupied leaves "
       "above 2 m, or --ceiling), and the space seen through them is out of the room. The "
       "map's frame must be levelled with the floor at z = 0. "
       "Writes nbv.json (the NBV, its score and the stop percentage), semioctree.ot, "
