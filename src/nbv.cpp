@@ -419,14 +419,20 @@ unsigned resolve_level(const SemiOcTree& tree, const NbvParams& p) {
   return p.level;
 }
 
-std::vector<Target> method1_targets(const SemiOcTree& tree) {
+std::vector<Target> method1_targets(const SemiOcTree& tree, const std::optional<RoomBox>& room) {
   std::vector<Target> out;
   const unsigned k = tree.coarse_level();
+  const double leaf_volume = std::pow(tree.leaf_size(), 3);
   tree.for_each_octant([&](const Octant& o) {
     if (o.label() != Label::kOccluded) return;
     Target t;
     t.center = o.center;
     t.weight = double(std::uint64_t(1) << (3 * (k - o.level)));
+    if (room) {
+      const double inside = room->overlap(o.center, o.size);
+      if (inside <= 0) return;
+      t.weight = std::min(t.weight, inside / leaf_volume);
+    }
     out.push_back(t);
   });
   return out;
@@ -536,6 +542,89 @@ std::vector<Target> method2_targets(const SemiOcTree& tree, unsigned level) {
 }  // namespace
 
 // --- candidates -----------------------------------------------------------------------
+
+bool RoomBox::contains(const Point3& p) const {
+  return p.x >= min.x && p.x <= max.x && p.y >= min.y && p.y <= max.y && p.z >= min.z &&
+         p.z <= max.z;
+}
+
+double RoomBox::overlap(const Point3& c, double size) const {
+  const double h = 0.5 * size;
+  auto along = [h](double lo, double hi, double v) {
+    return std::max(0.0, std::min(hi, v + h) - std::max(lo, v - h));
+  };
+  return along(min.x, max.x, c.x) * along(min.y, max.y, c.y) * along(min.z, max.z, c.z);
+}
+
+std::optional<RoomBox> room_box(const SemiOcTree& tree, const std::vector<Point3>& scanners,
+                                double height, double floor_z, double ceiling_z) {
+  if (tree.coarse_count() == 0 || !(ceiling_z > floor_z)) return std::nullopt;
+  const double r = tree.leaf_size();
+  const unsigned k = tree.coarse_level();
+  const std::int64_t span = std::int64_t(1) << k;
+  // Leaf cells of the plane over the map's coarse columns (0: not free, 1: free,
+  // 2: reached); cell (x, y) is key (x + x0, y + y0) − 32768.
+  CoarseIndex lo{std::numeric_limits<int>::max(), std::numeric_limits<int>::max(), 0};
+  CoarseIndex hi{std::numeric_limits<int>::min(), std::numeric_limits<int>::min(), 0};
+  tree.for_each_coarse([&](const CoarseIndex& c, SemiOcTreeNode*) {
+    lo.x = std::min(lo.x, c.x), lo.y = std::min(lo.y, c.y);
+    hi.x = std::max(hi.x, c.x), hi.y = std::max(hi.y, c.y);
+  });
+  const std::int64_t x0 = std::int64_t(lo.x) * span, y0 = std::int64_t(lo.y) * span;
+  const std::int64_t nx = (std::int64_t(hi.x) - lo.x + 1) * span;
+  const std::int64_t ny = (std::int64_t(hi.y) - lo.y + 1) * span;
+  std::vector<std::uint8_t> cell(std::size_t(nx * ny), 0);
+  auto idx = [&](std::int64_t x, std::int64_t y) { return std::size_t(y * nx + x); };
+  tree.for_each_octant([&](const Octant& o) {
+    const double h = 0.5 * o.size;
+    if (!free_space(o.label()) || height < o.center.z - h || height >= o.center.z + h) return;
+    const std::int64_t size = std::int64_t(1) << (k - o.level);
+    const std::int64_t cx = std::int64_t(o.key.k[0]) - 32768 - x0;
+    const std::int64_t cy = std::int64_t(o.key.k[1]) - 32768 - y0;
+    for (std::int64_t y = cy; y < cy + size; ++y)
+      for (std::int64_t x = cx; x < cx + size; ++x) cell[idx(x, y)] = 1;
+  });
+  // Seeds: the free cells within kSeedRadius of each scanner. Its own cell is
+  // not free until another scan sees it: the blind zone (minimum range) around
+  // a scanner is occluded.
+  constexpr double kSeedRadius = 1.0;  // m, beyond the minimum range
+  const std::int64_t reach = std::llround(std::ceil(kSeedRadius / r));
+  std::vector<std::size_t> stack;
+  for (const Point3& s : scanners) {
+    octomap::OcTreeKey key;
+    if (!tree.key_of(Point3(s.x, s.y, height), key)) continue;
+    const std::int64_t sx = std::int64_t(key.k[0]) - 32768 - x0;
+    const std::int64_t sy = std::int64_t(key.k[1]) - 32768 - y0;
+    for (std::int64_t y = sy - reach; y <= sy + reach; ++y)
+      for (std::int64_t x = sx - reach; x <= sx + reach; ++x) {
+        if (x < 0 || y < 0 || x >= nx || y >= ny || cell[idx(x, y)] != 1) continue;
+        if ((x - sx) * (x - sx) + (y - sy) * (y - sy) > reach * reach) continue;
+        cell[idx(x, y)] = 2;
+        stack.push_back(idx(x, y));
+      }
+  }
+  if (stack.empty()) return std::nullopt;
+  std::int64_t bx0 = nx, by0 = ny, bx1 = -1, by1 = -1;
+  while (!stack.empty()) {
+    const std::size_t i = stack.back();
+    stack.pop_back();
+    const std::int64_t x = std::int64_t(i) % nx, y = std::int64_t(i) / nx;
+    bx0 = std::min(bx0, x), by0 = std::min(by0, y), bx1 = std::max(bx1, x), by1 = std::max(by1, y);
+    const std::int64_t nbx[4] = {x + 1, x - 1, x, x}, nby[4] = {y, y, y + 1, y - 1};
+    for (int d = 0; d < 4; ++d) {
+      if (nbx[d] < 0 || nby[d] < 0 || nbx[d] >= nx || nby[d] >= ny) continue;
+      const std::size_t j = idx(nbx[d], nby[d]);
+      if (cell[j] != 1) continue;
+      cell[j] = 2;
+      stack.push_back(j);
+    }
+  }
+  // Cells bx0..bx1 span [bx0, bx1 + 1) leaves; one more leaf on each side.
+  RoomBox box;
+  box.min = Point3(double(bx0 + x0 - 1) * r, double(by0 + y0 - 1) * r, floor_z);
+  box.max = Point3(double(bx1 + x0 + 2) * r, double(by1 + y0 + 2) * r, ceiling_z);
+  return box;
+}
 
 double floor_layer_clearance(const RobotGeometry& robot, double leaf_size) {
   if (!(robot.ground_clearance > 0)) return 0.0;  // no clearance: the floor layer counts too
@@ -754,9 +843,13 @@ std::vector<double> score_targets(const SemiOcTree& tree, const std::vector<Targ
 
 std::vector<Target> targets_of(const SemiOcTree& tree, const NbvParams& params) {
   const unsigned level = resolve_level(tree, params);
-  return params.method == 1   ? method1_targets(tree)
-         : params.method == 3 ? method3_targets(tree)
-                              : method2_targets(tree, level);
+  if (params.method == 1) return method1_targets(tree, params.room);
+  std::vector<Target> t = params.method == 3 ? method3_targets(tree) : method2_targets(tree, level);
+  if (params.room)
+    t.erase(std::remove_if(t.begin(), t.end(),
+                           [&](const Target& x) { return !params.room->contains(x.center); }),
+            t.end());
+  return t;
 }
 
 }  // namespace
@@ -767,14 +860,20 @@ std::vector<double> score_positions(const SemiOcTree& tree, const std::vector<Po
 }
 
 double stop_percentage(const SemiOcTree& tree, const Point3& nbv, const ScannerView& limits,
-                       unsigned threads) {
-  const OctantStatistics stats = tree.statistics();
+                       unsigned threads, const std::optional<RoomBox>& room) {
   double total = 0;
-  for (Label l : {Label::kOccluded, Label::kEmpty, Label::kOccupied, Label::kOut, Label::kDoor,
-                  Label::kWindow, Label::kScan, Label::kNbv})
-    total += stats.volume[static_cast<int>(l)];
+  if (room) {
+    tree.for_each_octant([&](const Octant& o) {
+      if (o.label() != Label::kUnknown) total += room->overlap(o.center, o.size);
+    });
+  } else {
+    const OctantStatistics stats = tree.statistics();
+    for (Label l : {Label::kOccluded, Label::kEmpty, Label::kOccupied, Label::kOut, Label::kDoor,
+                    Label::kWindow, Label::kScan, Label::kNbv})
+      total += stats.volume[static_cast<int>(l)];
+  }
   if (total <= 0) return 0.0;
-  const std::vector<Target> targets = method1_targets(tree);
+  const std::vector<Target> targets = method1_targets(tree, room);
   const Limits lim(limits);
   // Each target's share seen: its Eq 4 term (1, 1/(1+n) or 0).
   std::vector<double> share(targets.size(), 0.0);
@@ -809,7 +908,8 @@ NbvResult next_best_view(const SemiOcTree& tree, const RobotGeometry& robot,
   res.seconds_scoring = seconds_since(t0);
   t0 = std::chrono::steady_clock::now();
   if (res.best)
-    res.stop_percent = stop_percentage(tree, res.best->position, params.limits, params.threads);
+    res.stop_percent =
+        stop_percentage(tree, res.best->position, params.limits, params.threads, params.room);
   res.seconds_stop = seconds_since(t0);
   return res;
 }

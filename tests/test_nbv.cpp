@@ -843,6 +843,68 @@ TEST(Nbv, StopPercentageEqualsHandComputation) {
   EXPECT_NEAR(stop_percentage(m.t, nbv), 100.0 * 1.5 * v / (38.4 - v), 1e-9);
 }
 
+// The room is what the scanners' free space reaches: a labelled door stops the
+// fill, a hole in the wall does not; the scanner's own cell (its blind zone,
+// occluded) does not stop the seeding.
+TEST(Nbv, RoomBoxIsTheFreeSpaceTheScannersStandIn) {
+  Map m(8, 5, 3);  // 6.4 × 4 × 2.4 m
+  m.walls(6.4, 4.0, 2.4);
+  m.leaves({4.0, 0, 0}, {4.05, 4.0, 2.4}, Label::kOccupied);  // a wall at x = 4 m
+  m.leaves({4.0, 1.6, 0}, {4.05, 2.4, 2.0}, Label::kDoor);    // and a door in it
+  m.leaf(2.025, 2.025, 1.525, Label::kOccluded);              // the scanner's blind zone
+  const std::vector<Point3> scanner{{2.025, 2.025, 1.525}};
+  const auto box = room_box(m.t, scanner, 1.525, 0.0, 2.4);
+  ASSERT_TRUE(box);
+  // Free cells x, y ∈ [0.05, 4.0) × [0.05, 3.95), grown by a leaf.
+  EXPECT_NEAR(box->min.x, 0.0, 1e-9);
+  EXPECT_NEAR(box->min.y, 0.0, 1e-9);
+  EXPECT_NEAR(box->max.x, 4.05, 1e-9);
+  EXPECT_NEAR(box->max.y, 4.0, 1e-9);
+  EXPECT_EQ(box->min.z, 0.0);
+  EXPECT_EQ(box->max.z, 2.4);
+  // A plane above the door (z = 2.2) holds the same room.
+  const auto above = room_box(m.t, scanner, 2.2, 0.0, 2.4);
+  ASSERT_TRUE(above);
+  EXPECT_NEAR(above->max.x, 4.05, 1e-9);
+  // Not labelled as a door, the hole lets the fill through to the far wall.
+  m.leaves({4.0, 1.6, 0}, {4.05, 2.4, 2.0}, Label::kEmpty);
+  const auto leaky = room_box(m.t, scanner, 1.525, 0.0, 2.4);
+  ASSERT_TRUE(leaky);
+  EXPECT_NEAR(leaky->max.x, 6.4, 1e-9);
+  // No scanner in free space, or no height between floor and ceiling: no room.
+  EXPECT_FALSE(room_box(m.t, {}, 1.525, 0.0, 2.4));
+  EXPECT_FALSE(room_box(m.t, {{1.0, 1.0, 9.0}}, 9.0, 0.0, 2.4));
+  EXPECT_FALSE(room_box(m.t, scanner, 1.525, 2.4, 2.4));
+}
+
+// With a room, targets and both volumes of Eq 5 are counted inside it; an
+// octant straddling its face counts its part inside.
+TEST(Nbv, RoomLimitsTheTargetsAndTheStopPercentage) {
+  Map m(5, 5, 3);  // 4 × 4 × 2.4 m
+  const Point3 nbv(0.5, 0.6, 1.0);
+  m.set(1.0, 2.6, 1.0, 1, Label::kOccluded);  // V1 [0.8, 1.2) × [2.4, 2.8): direct
+  m.set(1.0, 3.0, 1.0, 1, Label::kOccluded);  // V2 behind V1: 1/(1+1)
+  m.set(3.4, 2.6, 1.0, 1, Label::kOccluded);  // F, direct but beyond x = 2 m
+  const double v = 0.4 * 0.4 * 0.4;
+  EXPECT_NEAR(stop_percentage(m.t, nbv), 100.0 * 2.5 * v / 38.4, 1e-9);
+  NbvParams p;  // the scanner's default limits, as stop_percentage's
+  const double leaves = v / std::pow(kLeaf, 3);
+  EXPECT_NEAR(score_at(m.t, nbv, p), 2.5 * leaves, 1e-6);
+
+  RoomBox room{{0, 0, 0}, {2.0, 4.0, 2.4}};  // F outside
+  EXPECT_NEAR(stop_percentage(m.t, nbv, {}, 0, room), 100.0 * 1.5 * v / (2.0 * 4.0 * 2.4), 1e-9);
+  p.room = room;
+  EXPECT_NEAR(score_at(m.t, nbv, p), 1.5 * leaves, 1e-6);
+
+  room.max.x = 1.0;  // through the middle of V1 and V2: half of each counts
+  EXPECT_NEAR(stop_percentage(m.t, nbv, {}, 0, room), 100.0 * 0.75 * v / (1.0 * 4.0 * 2.4), 1e-9);
+  p.room = room;
+  EXPECT_NEAR(score_at(m.t, nbv, p), 0.75 * leaves, 1e-6);
+  const NbvResult r = next_best_view(m.t, RobotGeometry{}, nbv, {}, p);
+  ASSERT_TRUE(r.best);
+  EXPECT_NEAR(r.stop_percent, stop_percentage(m.t, r.best->position, p.limits, 0, room), 1e-12);
+}
+
 TEST(Nbv, NextBestViewSameForAnyThreadCount) {
   PocketRoom m;
   m.set(1.0, 4.0, 0.5, 3, Label::kOccluded);

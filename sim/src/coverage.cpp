@@ -938,9 +938,11 @@ MissedSamples explain_missed_samples(const GroundTruth& truth, const CoverageRef
     if (in_view[m]) {
       ++out.in_view;
       ++part.in_view;
+      out.in_view_samples.push_back(static_cast<std::uint32_t>(missed[m]));
     } else {
       ++out.hidden;
       ++part.hidden;
+      out.hidden_samples.push_back(static_cast<std::uint32_t>(missed[m]));
     }
   }
   std::stable_sort(parts.begin(), parts.end(), [](const MissedPart& a, const MissedPart& b) {

@@ -13,6 +13,7 @@
 
 #include "commands.h"
 #include "option_checks.h"
+#include "semioctree/octomap_ext/file_io.h"
 #include "semioctree/sim/coverage.h"
 #include "semioctree/sim/geometry.h"
 #include "semioctree/sim/ground_truth.h"
@@ -26,6 +27,29 @@
 namespace semioctree::cli {
 
 namespace {
+
+// The reference samples a survey missed, for CloudCompare beside cloud.ply: binary PLY,
+// x y z as float, an RGB colour (orange: in view of a scan but sampled too sparsely,
+// blue: hidden from every scan) and `hidden` (0 or 1) to filter on.
+void write_missed_samples_ply(const sim::CoverageReference& ref, const sim::MissedSamples& missed,
+                              const std::string& path) {
+  write_file_atomically(path, [&](std::ostream& os) {
+    os << "ply\nformat binary_little_endian 1.0\ncomment semioctree reference samples a survey "
+          "missed\nelement vertex "
+       << missed.in_view_samples.size() + missed.hidden_samples.size()
+       << "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\n"
+          "property uchar green\nproperty uchar blue\nproperty uchar hidden\nend_header\n";
+    auto put = [&](const std::vector<std::uint32_t>& samples, const std::uint8_t(&rgbh)[4]) {
+      for (std::uint32_t i : samples) {
+        const Eigen::Vector3f p = ref.points.at(i).cast<float>();  // x86: little-endian
+        os.write(reinterpret_cast<const char*>(p.data()), 3 * sizeof(float));
+        os.write(reinterpret_cast<const char*>(rgbh), sizeof rgbh);
+      }
+    };
+    put(missed.in_view_samples, {255, 140, 0, 0});
+    put(missed.hidden_samples, {30, 90, 255, 1});
+  });
+}
 
 struct SurveyOptions {
   std::string scene;
@@ -320,6 +344,9 @@ void run_survey(const SurveyOptions& o) {
     for (std::size_t k = 0; k < missed.parts.size() && k < 3; ++k)
       std::printf("    %s: %.2f %% in view, %.2f %% hidden\n", missed.parts[k].label.c_str(),
                   percent_of(missed.parts[k].in_view), percent_of(missed.parts[k].hidden));
+    const std::string missed_ply = (std::filesystem::path(o.out) / "coverage_missed.ply").string();
+    write_missed_samples_ply(ref, missed, missed_ply);
+    std::printf("  wrote %s (orange: in view but too sparse, blue: hidden)\n", missed_ply.c_str());
   }
   extra["seconds_total"] = since(t_start);
   session.write_survey_json(stopped_because, extra);
@@ -338,7 +365,7 @@ void add_survey_command(CLI::App& app) {
       "windows, occlusion), choose the next best view, drive there; until the stop percentage "
       "is below --stop, no feasible candidate remains, or --max-scans scans are taken. Writes "
       "survey.json and scan_NN/ (semioctree.ot, labels_color.ot, occupancy.bt, slice.png, "
-      "cloud.ply) per scan.");
+      "cloud.ply) per scan, and coverage_missed.ply (the reference surface it missed).");
   cmd->add_option("--scene", o->scene, "scene file (.scene.json, mesh or .bt)")
       ->required()
       ->check(CLI::ExistingFile);

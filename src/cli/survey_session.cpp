@@ -81,6 +81,11 @@ void add_planning_options(CLI::App& cmd, PlanningOptions& o) {
                  "else at least 1000)")
       ->check(zero_or_whole_in(1000, 1000000000))
       ->capture_default_str();
+  cmd.add_flag("--whole-map", o.whole_map,
+               "count occluded space as NBV targets and in the stop percentage over the whole "
+               "map, as Eq 5 reads when the grid is the room; default: only inside the room the "
+               "scans stand in (its walls, floor and ceiling), so that space behind the walls or "
+               "seen out of a window does not count");
   cmd.add_option("--threads", o.threads, "worker threads (0: one per core; at most 256)")
       ->check(thread_count())
       ->capture_default_str();
@@ -109,6 +114,7 @@ void apply_planning_options(const PlanningOptions& o, SessionParams& p, bool hom
   p.nbv.threads = o.threads;
   p.nbv.limits = p.map.limits;
   p.stop_percent = o.stop;
+  p.room_only = !o.whole_map;
 }
 
 SurveySession::SurveySession(const SessionParams& params) : params_(params), map_(params.map) {
@@ -137,7 +143,7 @@ void clear_previous_survey(const std::string& dir) {
     const bool scan_dir = name.size() == 7 && name.compare(0, 5, "scan_") == 0 &&
                           std::isdigit(static_cast<unsigned char>(name[5])) &&
                           std::isdigit(static_cast<unsigned char>(name[6])) && e.is_directory(ec);
-    if (scan_dir || name == "survey.json") {
+    if (scan_dir || name == "survey.json" || name == "coverage_missed.ply") {
       fs::remove_all(e.path(), ec);
       if (ec)
         throw std::runtime_error(e.path().string() +
@@ -252,6 +258,17 @@ ScanOutcome SurveySession::add_scan(const IncomingScan& in,
   const Point3 robot = robot_position.value_or(scanner);
   NbvParams nbv_params = params_.nbv;
   nbv_params.grid_anchor = map_.scanners().front();  // see NbvParams::grid_anchor
+  if (params_.room_only) {
+    nbv_params.room = room_box(map_.tree(), map_.scanners(), params_.robot.scanner_height, 0.0,
+                               map_.ceiling_height());
+    if (nbv_params.room) {
+      const RoomBox& b = *nbv_params.room;
+      std::printf("  room: x %.2f..%.2f, y %.2f..%.2f, z %.2f..%.2f m (targets and Eq 5 inside)\n",
+                  b.min.x, b.max.x, b.min.y, b.max.y, b.min.z, b.max.z);
+    } else {
+      std::printf("  room: no scanner stands in free space: targets and Eq 5 over the whole map\n");
+    }
+  }
   CountProgress progress(stdout, "  nbv: scored", "candidates");
   nbv_params.progress = progress.callback();
   const NbvResult nbv =
@@ -310,6 +327,11 @@ ScanOutcome SurveySession::add_scan(const IncomingScan& in,
                       : json(nullptr);
   r["candidates"] = nbv.candidate_report.feasible;
   r["occluded_targets"] = nbv.scoring.targets;
+  if (nbv_params.room)  // where targets and Eq 5 were counted (null: the whole map)
+    r["room"] = {{"min", {nbv_params.room->min.x, nbv_params.room->min.y, nbv_params.room->min.z}},
+                 {"max", {nbv_params.room->max.x, nbv_params.room->max.y, nbv_params.room->max.z}}};
+  else
+    r["room"] = nullptr;
   r["registration"] = registration;
   r["seconds"] = seconds;
   records_.push_back(r);

@@ -23,6 +23,7 @@ struct SessionParams {
   NbvParams nbv;
   RobotGeometry robot;
   double stop_percent = 0.1;
+  bool room_only = true;  // NbvParams::room from room_box at every NBV
   std::string out;
 };
 
@@ -36,6 +37,7 @@ struct PlanningOptions {
   double candidate_spacing = 0.5;
   std::size_t target_points = 400000;
   unsigned threads = 0;
+  bool whole_map = false;  // count targets and Eq 5 over the whole map, not the room
 };
 void add_planning_options(CLI::App& cmd, PlanningOptions& o);
 // Fills `p` from them (the grid is the semioctree, or with `homogeneous` the

@@ -139,6 +139,10 @@ struct MissedSamples {
   std::size_t in_view = 0;
   std::size_t hidden = 0;
   std::vector<MissedPart> parts;  // elements with missed samples, most missed first
+  // The missed samples themselves, as indices into reference.points, ascending: where to
+  // look in the scene (the survey writes them as coverage_missed.ply).
+  std::vector<std::uint32_t> in_view_samples;
+  std::vector<std::uint32_t> hidden_samples;
 };
 
 // `covered` is covered_samples of the survey's points (one flag per reference sample).
