@@ -275,7 +275,9 @@ TEST(Cli, MapNbvFindsDoorsAndWindowsInAnOctomapMap) {
   const auto dir = testing::temp_dir("cli-map-nbv-lab");
   const std::string pcd = (dir / "scan.pcd").string();
   const CliRun scan = run_cli("scan --scene " + std::string(SEMIOCTREE_SOURCE_DIR) +
-                              "/sim/scenes/lab.scene.json --at 5.2,3.6 --out " + pcd);
+                              "/sim/scenes/lab.scene.json --at 5.2,3.6 --azimuth-step 0.2 "
+                              "--elevation-step 0.2 --out " +
+                              pcd);
   ASSERT_EQ(scan.exit_code, 0) << scan.all();
   pcl::PointCloud<pcl::PointXYZ> cloud;
   ASSERT_EQ(pcl::io::loadPCDFile(pcd, cloud), 0);

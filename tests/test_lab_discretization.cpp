@@ -12,7 +12,7 @@ namespace semioctree {
 namespace {
 
 TEST(LabDiscretization, SemioctreeNeedsFarFewerOctants) {
-  const testing::LabScan lab = testing::scan_lab();
+  const testing::LabScan lab = testing::scan_lab(1, {}, testing::kTestStepDeg);
   const Cloud& cloud = lab.world;
   PreprocessParams pp;
   pp.target_points = 400000;
@@ -50,7 +50,8 @@ TEST(LabDiscretization, ScansInTheCornersAreLevelled) {
   for (const auto& [x, y] : {std::pair{0.77, 0.78}, std::pair{9.77, 0.78}, std::pair{1.27, 7.78},
                              std::pair{9.27, 7.28}}) {
     for (double yaw : {0.0, 35.0}) {
-      const testing::LabScan lab = testing::scan_lab(3, sim::Pose2{x, y, yaw});
+      const testing::LabScan lab =
+          testing::scan_lab(3, sim::Pose2{x, y, yaw}, testing::kTestStepDeg);
       PreprocessParams pp;
       pp.target_points = 400000;
       SCOPED_TRACE(::testing::Message() << "at " << x << ", " << y << ", yaw " << yaw);

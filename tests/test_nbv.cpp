@@ -935,7 +935,7 @@ TEST(Nbv, NextBestViewSameForAnyThreadCount) {
 #ifdef SEMIOCTREE_HAVE_SIM
 TEST(NbvLab, FirstScanHasAFeasibleBestCandidateInTheRoom) {
   if (std::getenv("SEMIOCTREE_SANITIZED")) GTEST_SKIP() << "heavy lab test skipped when sanitized";
-  const testing::LabScan lab = testing::scan_lab();
+  const testing::LabScan lab = testing::scan_lab(1, {}, testing::kTestStepDeg);
   PreprocessParams pp;
   pp.target_points = 400000;
   const PreprocessResult pre = preprocess(lab.world, pp);

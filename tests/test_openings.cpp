@@ -20,9 +20,17 @@
 #include "semioctree/sim/raycaster.h"
 #include "semioctree/sim/scanner.h"
 #include "semioctree/sim/scene.h"
+#include "support/lab_scan.h"
 
 namespace semioctree {
 namespace {
+
+// The lab's scanner at the tests' step (support/lab_scan.h): 4× fewer rays.
+sim::ScannerConfig test_scanner(const sim::Scene& scene) {
+  sim::ScannerConfig c = scene.scanner;
+  c.azimuth_step_deg = c.elevation_step_deg = testing::kTestStepDeg;
+  return c;
+}
 
 using Vec3 = Eigen::Vector3d;
 using Skip = std::function<bool(const Vec3&)>;
@@ -234,7 +242,7 @@ TEST(Openings, LabSceneFromStartMatchesGroundTruth) {
     so.seed = seed;
     so.threads = 1;
     so.with_intensity = false;
-    const sim::Scan s = sim::scan(truth.ray_caster(), scene.scanner, start, so);
+    const sim::Scan s = sim::scan(truth.ray_caster(), test_scanner(scene), start, so);
     Cloud cloud;
     cloud.reserve(s.points.size());
     const Eigen::Isometry3d to_world = s.sensor_to_world();
@@ -360,7 +368,7 @@ TEST_P(OccupancyMapOfTheLab, FromItsStartAllFourOpeningsAreFound) {
   sim::ScanOptions so;
   so.seed = 1;
   so.with_intensity = false;
-  const sim::Scan s = sim::scan(truth.ray_caster(), scene.scanner, start, so);
+  const sim::Scan s = sim::scan(truth.ray_caster(), test_scanner(scene), start, so);
   const Eigen::Isometry3d to_world = s.sensor_to_world();
   octomap::Pointcloud points;
   points.reserve(s.points.size());
