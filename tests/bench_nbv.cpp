@@ -180,6 +180,11 @@ int main(int argc, char** argv) {
   const std::vector<double> m2_scores = score_positions(*semi, semi_sub, m2, &m2_stats);
   const double m2_sub_s = bench::seconds_since(t_sub);
   // Method 3 (frontier surface) on all candidates, against method 1's scoring.
+  // What the survey runs: method 1 counted inside the room (NbvParams::room).
+  NbvParams in_room = params;
+  in_room.room = room_box(*semi, {origin}, origin.z, 0.0, pre.ceiling_height);
+  const NbvResult sr = next_best_view(*semi, robot, origin, {origin}, in_room);
+  const double room_total = sr.seconds_candidates + sr.seconds_scoring + sr.seconds_stop;
   NbvParams m3 = params;
   m3.method = 3;
   ScoringStats m3_stats;
@@ -291,6 +296,10 @@ int main(int argc, char** argv) {
       "\"same_best_as_method1_in_subset\": %s},\n"
       "  \"semioctree_method3\": {\"targets\": %zu, \"candidates\": %zu, \"seconds_scoring\": "
       "%.4f, \"scoring_speedup_vs_method1\": %.2f},\n"
+      "  \"semioctree_room\": {\"found\": %s, \"min\": [%.2f, %.2f, %.2f], \"max\": [%.2f, %.2f, "
+      "%.2f], \"occluded_targets\": %zu, \"seconds_total\": %.4f, \"best\": {\"x\": %.3f, "
+      "\"y\": %.3f}, \"stop_percent\": %.4f, \"speedup_vs_whole_map\": %.2f,\n"
+      "    \"note\": \"the survey's NBV: targets and Eq 5 inside room_box\"},\n"
       "  \"scoring_speedup_vs_homogeneous\": %.2f,\n"
       "  \"scoring_speedup_vs_octomap_castRay\": %.2f,\n"
       "  \"total_speedup_vs_homogeneous\": %.2f\n}\n",
@@ -310,7 +319,13 @@ int main(int argc, char** argv) {
       semi_sub.size(), m2_stats.segments, m2_sub_s,
       semi_sub.empty() ? 0.0 : m2_sub_s * double(semi_positions.size()) / double(semi_sub.size()),
       m2_best == m1_best ? "true" : "false", m3_stats.targets, semi_positions.size(), m3_s,
-      s.seconds_scoring / std::max(1e-9, m3_s), homo_scoring_s / std::max(1e-9, s.seconds_scoring),
+      s.seconds_scoring / std::max(1e-9, m3_s), in_room.room ? "true" : "false",
+      in_room.room ? in_room.room->min.x : 0.0, in_room.room ? in_room.room->min.y : 0.0,
+      in_room.room ? in_room.room->min.z : 0.0, in_room.room ? in_room.room->max.x : 0.0,
+      in_room.room ? in_room.room->max.y : 0.0, in_room.room ? in_room.room->max.z : 0.0,
+      sr.scoring.targets, room_total, sr.best ? sr.best->position.x : 0.0,
+      sr.best ? sr.best->position.y : 0.0, sr.stop_percent, semi_total / std::max(1e-9, room_total),
+      homo_scoring_s / std::max(1e-9, s.seconds_scoring),
       octo_scoring_s / std::max(1e-9, s.seconds_scoring), homo_total / std::max(1e-9, semi_total));
   return 0;
 }
