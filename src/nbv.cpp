@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include "parallel_for.h"
 
@@ -543,6 +544,22 @@ std::vector<Target> method2_targets(const SemiOcTree& tree, unsigned level) {
 
 // --- candidates -----------------------------------------------------------------------
 
+namespace {
+
+// The map's coarse voxels' extent in x and y (z of the results unused): the
+// plane the 2-D grids below cover.
+std::pair<CoarseIndex, CoarseIndex> coarse_columns(const SemiOcTree& tree) {
+  CoarseIndex lo{std::numeric_limits<int>::max(), std::numeric_limits<int>::max(), 0};
+  CoarseIndex hi{std::numeric_limits<int>::min(), std::numeric_limits<int>::min(), 0};
+  tree.for_each_coarse([&](const CoarseIndex& c, SemiOcTreeNode*) {
+    lo.x = std::min(lo.x, c.x), lo.y = std::min(lo.y, c.y);
+    hi.x = std::max(hi.x, c.x), hi.y = std::max(hi.y, c.y);
+  });
+  return {lo, hi};
+}
+
+}  // namespace
+
 bool RoomBox::contains(const Point3& p) const {
   return p.x >= min.x && p.x <= max.x && p.y >= min.y && p.y <= max.y && p.z >= min.z &&
          p.z <= max.z;
@@ -564,12 +581,8 @@ std::optional<RoomBox> room_box(const SemiOcTree& tree, const std::vector<Point3
   const std::int64_t span = std::int64_t(1) << k;
   // Leaf cells of the plane over the map's coarse columns (0: not free, 1: free,
   // 2: reached); cell (x, y) is key (x + x0, y + y0) − 32768.
-  CoarseIndex lo{std::numeric_limits<int>::max(), std::numeric_limits<int>::max(), 0};
-  CoarseIndex hi{std::numeric_limits<int>::min(), std::numeric_limits<int>::min(), 0};
-  tree.for_each_coarse([&](const CoarseIndex& c, SemiOcTreeNode*) {
-    lo.x = std::min(lo.x, c.x), lo.y = std::min(lo.y, c.y);
-    hi.x = std::max(hi.x, c.x), hi.y = std::max(hi.y, c.y);
-  });
+  const std::pair<CoarseIndex, CoarseIndex> columns = coarse_columns(tree);
+  const CoarseIndex &lo = columns.first, &hi = columns.second;
   const std::int64_t x0 = std::int64_t(lo.x) * span, y0 = std::int64_t(lo.y) * span;
   const std::int64_t nx = (std::int64_t(hi.x) - lo.x + 1) * span;
   const std::int64_t ny = (std::int64_t(hi.y) - lo.y + 1) * span;
@@ -647,12 +660,8 @@ std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry&
 
   // The 2-D grid (leaf cells) over the map's coarse columns, with a border of
   // one obstacle cell: outside the map is unknown space.
-  CoarseIndex lo{std::numeric_limits<int>::max(), std::numeric_limits<int>::max(), 0};
-  CoarseIndex hi{std::numeric_limits<int>::min(), std::numeric_limits<int>::min(), 0};
-  tree.for_each_coarse([&](const CoarseIndex& c, SemiOcTreeNode*) {
-    lo.x = std::min(lo.x, c.x), lo.y = std::min(lo.y, c.y);
-    hi.x = std::max(hi.x, c.x), hi.y = std::max(hi.y, c.y);
-  });
+  const std::pair<CoarseIndex, CoarseIndex> columns = coarse_columns(tree);
+  const CoarseIndex &lo = columns.first, &hi = columns.second;
   const std::int64_t x0 = std::int64_t(lo.x) * span - 1, y0 = std::int64_t(lo.y) * span - 1;
   const int nx = static_cast<int>((std::int64_t(hi.x) - lo.x + 1) * span + 2);
   const int ny = static_cast<int>((std::int64_t(hi.y) - lo.y + 1) * span + 2);
