@@ -1,4 +1,4 @@
-# Next-Best-View candidates, scores and the stop percentage (src/nbv.cpp).
+# Next-Best-View candidates, scores and the stop percentage (src/nbv/, docs/nbv.md).
 semioctree_add_test(test_nbv SOURCES test_nbv.cpp LIBS semioctree)
 target_include_directories(test_nbv PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
 # The lab tests need the synthetic scanner for their input.

@@ -1,0 +1,49 @@
+// Next-Best-View candidates: the grid positions the robot can scan from next
+// (docs/nbv.md, "Candidates" and "Blind zone of past scans").
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "semioctree/nbv/params.h"
+#include "semioctree/octomap_ext/semioctree.h"
+
+namespace semioctree {
+
+struct RobotGeometry {
+  double radius = 0.5;          // safety cylinder radius, m
+  double scanner_height = 1.5;  // optical centre above the floor, m
+  double top_margin = 0.1;      // scanner head above the optical centre, m
+  // Obstacles lying wholly below this height (or within the floor's leaf layer,
+  // see floor_layer_clearance) are driven over: the remains of the cut floor.
+  double ground_clearance = 0.05;  // m
+  double top() const { return scanner_height + top_margin; }
+};
+
+struct CandidateReport {
+  std::size_t grid_points = 0;  // grid points over the map
+  std::size_t not_empty = 0;    // octant at scanner height not empty (or outside the map)
+  std::size_t cylinder_blocked = 0;
+  std::size_t unreachable = 0;
+  std::size_t feasible = 0;
+  std::size_t blind_octants_freed = 0;  // occluded octants exempted by the blind-zone rule
+  bool robot_in_map = false;
+};
+
+// The height below which the candidate test drives over obstacles: the robot's
+// ground clearance, or `leaf_size` if that is larger; 0 when the clearance is
+// not > 0 (then nothing is driven over).
+double floor_layer_clearance(const RobotGeometry& robot, double leaf_size);
+
+// Feasible candidate positions (scanner positions, z = scanner height), in grid
+// order (y, then x). `robot_position`: the robot on the floor (z ignored);
+// `past_scans`: optical centres of the scans so far (their blind zones). Uses
+// candidate_spacing, grid_anchor, limits and blind_zone_is_free of `params`.
+// Throws std::invalid_argument for a radius < 0 or a scanner height <= 0, or
+// a grid anchor beyond the key range.
+std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry& robot,
+                                    const Point3& robot_position,
+                                    const std::vector<Point3>& past_scans, const NbvParams& params,
+                                    CandidateReport* report = nullptr);
+
+}  // namespace semioctree

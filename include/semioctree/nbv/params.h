@@ -1,0 +1,36 @@
+// Parameters of the Next-Best-View computation (docs/nbv.md).
+#pragma once
+
+#include <cstddef>
+#include <functional>
+#include <optional>
+
+#include "semioctree/nbv/room.h"
+#include "semioctree/occlusion.h"
+#include "semioctree/octomap_ext/semioctree.h"
+
+namespace semioctree {
+
+struct NbvParams {
+  static constexpr unsigned kLeafLevel = ~0u;
+  int method = 1;               // 1: all levels, volume-weighted; 2: one level; 3: frontier surface
+  unsigned level = kLeafLevel;  // method 2: the level ℓ (kLeafLevel: the tree's leaf)
+  double candidate_spacing = 0.5;  // m, rounded to a whole number of leaves (≥ 1)
+  // A point the candidate grid passes through: the leaf cell holding it (x, y; z
+  // ignored) is a grid point. Empty: the grid points are the leaf cells
+  // ≡ m/2 (mod m), m = spacing in leaves. The survey anchors it at its first scan.
+  std::optional<Point3> grid_anchor;
+  unsigned threads = 0;  // 0: one per core; results do not depend on it
+  // Range and elevation limits of the scanner (position ignored): for the
+  // score, the stop percentage and the blind zone of past scans.
+  ScannerView limits;
+  bool blind_zone_is_free = true;  // the blind-zone rule (docs/nbv.md; false: paper only)
+  // The surveyed room (room_box): occluded space outside it is no target and
+  // Eq 5 counts volumes inside it only. Empty: the whole map, as the paper reads.
+  std::optional<RoomBox> room;
+  // Called after each candidate is scored with (candidates scored, candidates),
+  // from the scoring threads: it must be thread-safe. Empty: no calls.
+  std::function<void(std::size_t, std::size_t)> progress;
+};
+
+}  // namespace semioctree

@@ -1,0 +1,60 @@
+// Next-Best-View scores (paper Eq 3–4), the stop percentage (Eq 5) and the
+// whole NBV step (docs/nbv.md, "Score", "Stop percentage").
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <vector>
+
+#include "semioctree/nbv/candidates.h"
+#include "semioctree/nbv/params.h"
+#include "semioctree/nbv/room.h"
+#include "semioctree/occlusion.h"
+#include "semioctree/octomap_ext/semioctree.h"
+
+namespace semioctree {
+
+struct NbvCandidate {
+  Point3 position;  // scanner position: (x, y) of the candidate, z = scanner height
+  // Eq 3, in the method's unit: method 1 leaf cells of occluded volume (× leaf³ for
+  // m³), method 2 level-ℓ cells, method 3 m² of frontier faces. Compare scores of
+  // one method only.
+  double score = 0;
+};
+
+struct ScoringStats {
+  std::size_t targets = 0;           // occluded targets (method 2: level-ℓ cells)
+  std::size_t segments = 0;          // candidate–target lines within the scanner's limits
+  std::size_t blocked_by_cache = 0;  // of which found blocked without a traversal
+  std::size_t visible = 0;           // of which not blocked (score > 0)
+  double cpu_seconds = 0;            // CPU time of all scoring threads (hardly load-dependent)
+};
+
+struct NbvResult {
+  std::optional<NbvCandidate> best;      // highest score (first in grid order on ties)
+  std::vector<NbvCandidate> candidates;  // all feasible candidates, scored, in grid order
+  CandidateReport candidate_report;
+  ScoringStats scoring;
+  double stop_percent = 0;  // from the best candidate; 0 when there is none
+  double seconds_candidates = 0, seconds_scoring = 0, seconds_stop = 0;  // wall time
+};
+
+// Eq 3 score of each scanner position (any positions, feasible or not), in the
+// order given. Throws std::invalid_argument for a method other than 1, 2 or 3,
+// or a method-2 level finer than the tree's leaf.
+std::vector<double> score_positions(const SemiOcTree& tree, const std::vector<Point3>& positions,
+                                    const NbvParams& params, ScoringStats* stats = nullptr);
+
+// Candidates (find_candidates), their scores, the best candidate and its stop
+// percentage. Throws std::invalid_argument as find_candidates and score_positions do.
+NbvResult next_best_view(const SemiOcTree& tree, const RobotGeometry& robot,
+                         const Point3& robot_position, const std::vector<Point3>& past_scans,
+                         const NbvParams& params = {});
+
+// Eq 5 for a scanner at `nbv` (its optical centre), in percent: the method-1
+// expected occluded volume seen over the volume of all but unknown space;
+// inside `room` only if given. 0 for a map without counted volume.
+double stop_percentage(const SemiOcTree& tree, const Point3& nbv, const ScannerView& limits = {},
+                       unsigned threads = 0, const std::optional<RoomBox>& room = std::nullopt);
+
+}  // namespace semioctree

@@ -1,0 +1,45 @@
+#include "blind_zone.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace semioctree::nbv_detail {
+
+namespace {
+
+// In the blind zone of the scanner at `s`: closer than its minimum range or
+// below its minimum elevation.
+bool blind_from(const Point3& s, const ScannerView& lim, const Point3& p) {
+  const double dx = p.x - s.x, dy = p.y - s.y, dz = p.z - s.z;
+  const double range = std::sqrt(dx * dx + dy * dy + dz * dz);
+  if (range < lim.min_range) return true;
+  const double elevation = std::asin(std::clamp(dz / range, -1.0, 1.0)) * 180.0 / M_PI;
+  return elevation < lim.elevation_min_deg;
+}
+
+}  // namespace
+
+bool blind_octant(const Octant& o, unsigned coarse_level, const std::vector<Point3>& scans,
+                  const ScannerView& lim) {
+  auto blind = [&](const Point3& p) {
+    for (const Point3& s : scans)
+      if (blind_from(s, lim, p)) return true;
+    return false;
+  };
+  if (!blind(o.center)) return false;
+  if (o.level >= coarse_level) return true;  // a leaf is judged by its centre
+  // A larger octant by the centres of its corner leaves, so that an octant
+  // merged from blind leaves (a pruned map) stays blind. Exact when one scan's
+  // ball or cone holds all of them (both are convex); across the two, a leaf
+  // in between might not be blind: rare, and only near a past scan position.
+  const double leaf = o.size / double(1u << (coarse_level - o.level));
+  const double h = 0.5 * (o.size - leaf);
+  for (int k = 0; k < 8; ++k) {
+    const Point3 q(o.center.x + ((k & 1) ? h : -h), o.center.y + ((k & 2) ? h : -h),
+                   o.center.z + ((k & 4) ? h : -h));
+    if (!blind(q)) return false;
+  }
+  return true;
+}
+
+}  // namespace semioctree::nbv_detail

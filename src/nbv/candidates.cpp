@@ -1,0 +1,203 @@
+#include "semioctree/nbv/candidates.h"
+
+#include <dynamicEDT3D/dynamicEDT3D.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+#include <utility>
+
+#include "blind_zone.h"
+#include "label_roles.h"
+#include "plane_grid.h"
+
+namespace semioctree {
+
+namespace {
+
+using nbv_detail::blind_octant;
+using nbv_detail::coarse_columns;
+using nbv_detail::flood_fill_4;
+using nbv_detail::free_space;
+
+// The 2-D grid of leaf cells over the map's coarse columns, with a border of
+// one cell; cell (x, y) is leaf column (x + x0, y + y0) (key − 32768).
+struct Plane {
+  CoarseIndex lo, hi;  // the coarse columns (coarse_columns)
+  std::int64_t x0 = 0, y0 = 0;
+  int nx = 0, ny = 0;
+  std::size_t index(int x, int y) const {
+    return std::size_t(y) * std::size_t(nx) + std::size_t(x);
+  }
+  std::size_t cells() const { return std::size_t(nx) * std::size_t(ny); }
+};
+
+Plane plane_over(const SemiOcTree& tree) {
+  const std::int64_t span = std::int64_t(1) << tree.coarse_level();
+  const std::pair<CoarseIndex, CoarseIndex> columns = coarse_columns(tree);
+  const CoarseIndex &lo = columns.first, &hi = columns.second;
+  Plane p;
+  p.lo = lo, p.hi = hi;
+  p.x0 = std::int64_t(lo.x) * span - 1, p.y0 = std::int64_t(lo.y) * span - 1;
+  p.nx = static_cast<int>((std::int64_t(hi.x) - lo.x + 1) * span + 2);
+  p.ny = static_cast<int>((std::int64_t(hi.y) - lo.y + 1) * span + 2);
+  return p;
+}
+
+// 1 for each cell whose column holds an obstacle for the safety cylinder: the
+// border (outside the map is unknown space), columns without coarse voxels, and
+// occupied, unknown or occluded (unless blind, with the rule on) octants in
+// z ∈ [clearance, top). Counts the blind octants exempted in `rep`.
+std::vector<std::uint8_t> obstacle_columns(const SemiOcTree& tree, const Plane& plane,
+                                           const RobotGeometry& robot,
+                                           const std::vector<Point3>& past_scans,
+                                           const NbvParams& params, CandidateReport& rep) {
+  const double r = tree.leaf_size();
+  const unsigned k = tree.coarse_level();
+  const std::int64_t span = std::int64_t(1) << k;
+  const int nx = plane.nx, ny = plane.ny;
+  std::vector<std::uint8_t> obstacle(plane.cells(), 0);
+  for (int x = 0; x < nx; ++x) obstacle[plane.index(x, 0)] = obstacle[plane.index(x, ny - 1)] = 1;
+  for (int y = 0; y < ny; ++y) obstacle[plane.index(0, y)] = obstacle[plane.index(nx - 1, y)] = 1;
+  auto mark = [&](std::int64_t cx, std::int64_t cy, std::int64_t size) {
+    for (std::int64_t y = cy; y < cy + size; ++y)
+      for (std::int64_t x = cx; x < cx + size; ++x)
+        obstacle[plane.index(int(x - plane.x0), int(y - plane.y0))] = 1;
+  };
+
+  // Leaf layers of the cylinder: z ∈ [0, top); octants lying wholly below the
+  // ground clearance, or within the floor's own leaf layer, are driven over.
+  const CoarseIndex &lo = plane.lo, &hi = plane.hi;
+  const std::int64_t layers =
+      std::max<std::int64_t>(1, std::llround(std::ceil(robot.top() / r - 1e-9)));
+  const double clearance = floor_layer_clearance(robot, r) / r + 1e-9;  // in cells
+  for (int cx = lo.x; cx <= hi.x; ++cx)
+    for (int cy = lo.y; cy <= hi.y; ++cy)
+      for (std::int64_t cz = 0; cz <= (layers - 1) >> k; ++cz)
+        if (double((cz + 1) * span) > clearance && !tree.find_coarse({cx, cy, int(cz)}))
+          mark(cx * span, cy * span, span);
+  tree.for_each_octant([&](const Octant& o) {
+    const std::int64_t size = std::int64_t(1) << (k - o.level);
+    const std::int64_t z = std::int64_t(o.key.k[2]) - 32768;
+    if (z >= layers || double(z + size) <= clearance) return;
+    const Label l = o.label();
+    if (l == Label::kOccluded) {
+      if (params.blind_zone_is_free && blind_octant(o, k, past_scans, params.limits)) {
+        ++rep.blind_octants_freed;
+        return;
+      }
+    } else if (l != Label::kOccupied && l != Label::kUnknown) {
+      return;
+    }
+    mark(std::int64_t(o.key.k[0]) - 32768, std::int64_t(o.key.k[1]) - 32768, size);
+  });
+  return obstacle;
+}
+
+// 1 for each cell with no obstacle cell centre within radius + leaf/2 of its
+// centre (dynamicEDT3D on the one-layer obstacle map).
+std::vector<std::uint8_t> clear_cells(const std::vector<std::uint8_t>& obstacle, const Plane& plane,
+                                      double radius, double r) {
+  const int nx = plane.nx, ny = plane.ny;
+  const double reach = (radius + 0.5 * r) / r;  // in cells
+  const int max_cells = static_cast<int>(std::ceil(reach)) + 2;
+  DynamicEDT3D edt(max_cells * max_cells);
+  edt.initializeEmpty(nx, ny, 1, true);
+  for (int y = 0; y < ny; ++y)
+    for (int x = 0; x < nx; ++x)
+      if (obstacle[plane.index(x, y)]) edt.occupyCell(x, y, 0);
+  edt.update(false);
+  std::vector<std::uint8_t> clear(obstacle.size(), 0);
+  for (int y = 0; y < ny; ++y)
+    for (int x = 0; x < nx; ++x)
+      clear[plane.index(x, y)] = double(edt.getSQCellDistance(x, y, 0)) > reach * reach;
+  return clear;
+}
+
+// 1 for each cell 4-connected to the robot's cell through clear cells (the
+// robot's own cell always counts); all 0 when the robot stands outside the map.
+std::vector<std::uint8_t> reachable_cells(const SemiOcTree& tree, const Plane& plane,
+                                          const Point3& robot_position,
+                                          const std::vector<std::uint8_t>& clear,
+                                          CandidateReport& rep) {
+  octomap::OcTreeKey rk;
+  if (!tree.key_of(robot_position, rk)) return std::vector<std::uint8_t>(clear.size(), 0);
+  const std::int64_t rx = std::int64_t(rk.k[0]) - 32768 - plane.x0;
+  const std::int64_t ry = std::int64_t(rk.k[1]) - 32768 - plane.y0;
+  if (!(rx > 0 && ry > 0 && rx < plane.nx - 1 && ry < plane.ny - 1))
+    return std::vector<std::uint8_t>(clear.size(), 0);
+  rep.robot_in_map = true;
+  return flood_fill_4(std::size_t(plane.nx), std::size_t(plane.ny), {plane.index(int(rx), int(ry))},
+                      [&](std::size_t j) { return clear[j] != 0; });
+}
+
+}  // namespace
+
+double floor_layer_clearance(const RobotGeometry& robot, double leaf_size) {
+  if (!(robot.ground_clearance > 0)) return 0.0;  // no clearance: the floor layer counts too
+  return std::max(robot.ground_clearance, leaf_size);
+}
+
+std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry& robot,
+                                    const Point3& robot_position,
+                                    const std::vector<Point3>& past_scans, const NbvParams& params,
+                                    CandidateReport* report) {
+  CandidateReport rep;
+  std::vector<Point3> out;
+  if (report) *report = rep;
+  if (tree.coarse_count() == 0) return out;
+  if (!(robot.radius >= 0) || !(robot.scanner_height > 0) || !(robot.top() > 0))
+    throw std::invalid_argument("RobotGeometry: radius >= 0 and scanner height > 0 required");
+  const double r = tree.leaf_size();
+
+  const Plane plane = plane_over(tree);
+  const std::vector<std::uint8_t> obstacle =
+      obstacle_columns(tree, plane, robot, past_scans, params, rep);
+  const std::vector<std::uint8_t> clear = clear_cells(obstacle, plane, robot.radius, r);
+  const std::vector<std::uint8_t> reached =
+      reachable_cells(tree, plane, robot_position, clear, rep);
+
+  // The candidate grid: every m-th leaf cell (world-aligned), at its centre.
+  const std::int64_t m = std::max<std::int64_t>(1, std::llround(params.candidate_spacing / r));
+  std::int64_t off_x = m / 2, off_y = m / 2;  // grid points: leaf cells ≡ off (mod m)
+  if (params.grid_anchor) {
+    octomap::OcTreeKey ak;
+    if (!tree.key_of(Point3(params.grid_anchor->x, params.grid_anchor->y, 0.0), ak))
+      throw std::invalid_argument("NbvParams: the candidate grid's anchor is beyond the key range");
+    off_x = ((std::int64_t(ak.k[0]) - 32768) % m + m) % m;
+    off_y = ((std::int64_t(ak.k[1]) - 32768) % m + m) % m;
+  }
+  auto first_on_grid = [&](std::int64_t v, std::int64_t off) {  // smallest g >= v, g ≡ off
+    std::int64_t d = v - off;
+    std::int64_t q = d >= 0 ? (d + m - 1) / m : -((-d) / m);
+    return off + q * m;
+  };
+  const std::int64_t x0 = plane.x0, y0 = plane.y0;
+  for (std::int64_t gy = first_on_grid(y0 + 1, off_y); gy < y0 + plane.ny - 1; gy += m) {
+    for (std::int64_t gx = first_on_grid(x0 + 1, off_x); gx < x0 + plane.nx - 1; gx += m) {
+      ++rep.grid_points;
+      const Point3 p((double(gx) + 0.5) * r, (double(gy) + 0.5) * r, robot.scanner_height);
+      const auto o = tree.find_octant(p);
+      if (!o || !free_space(o->label())) {
+        ++rep.not_empty;
+        continue;
+      }
+      const std::size_t i = plane.index(int(gx - x0), int(gy - y0));
+      if (!clear[i]) {
+        ++rep.cylinder_blocked;
+        continue;
+      }
+      if (!reached[i]) {
+        ++rep.unreachable;
+        continue;
+      }
+      ++rep.feasible;
+      out.push_back(p);
+    }
+  }
+  if (report) *report = rep;
+  return out;
+}
+
+}  // namespace semioctree

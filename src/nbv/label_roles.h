@@ -1,0 +1,18 @@
+// Internal: what the NBV makes of each label.
+#pragma once
+
+#include "semioctree/octomap_ext/semioctree.h"
+
+namespace semioctree::nbv_detail {
+
+// Space seen empty (markers of scan and NBV positions included).
+inline bool free_space(Label l) {
+  return l == Label::kEmpty || l == Label::kScan || l == Label::kNbv;
+}
+
+// An octant a line of sight cannot pass: occupied, unknown, door or window.
+inline bool blocks(Label l) {
+  return l == Label::kOccupied || l == Label::kUnknown || l == Label::kDoor || l == Label::kWindow;
+}
+
+}  // namespace semioctree::nbv_detail

@@ -1,0 +1,161 @@
+#include "semioctree/nbv/scoring.h"
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+
+#include "../parallel_for.h"
+#include "scanner_limits.h"
+#include "targets.h"
+#include "visibility.h"
+
+namespace semioctree {
+
+namespace {
+
+using detail::parallel_for;
+using detail::thread_count;
+using nbv_detail::BlockerCache;
+using nbv_detail::facing_area;
+using nbv_detail::Los;
+using nbv_detail::los_cells;
+using nbv_detail::los_octants;
+using nbv_detail::method1_targets;
+using nbv_detail::resolve_level;
+using nbv_detail::ScannerLimits;
+using nbv_detail::Target;
+using nbv_detail::targets_for;
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Eq 3 of each position over `targets` (docs/nbv.md, "Score" and "Cost").
+std::vector<double> score_targets(const SemiOcTree& tree, const std::vector<Target>& targets,
+                                  const std::vector<Point3>& positions, const NbvParams& params,
+                                  ScoringStats* stats) {
+  const unsigned level = resolve_level(tree, params);
+  const ScannerLimits lim(params.limits);
+  std::vector<double> scores(positions.size(), 0.0);
+  std::vector<ScoringStats> per(positions.size());
+  // The last blocker found on a line to each target, from any candidate: the
+  // occluder that hides a target usually hides it from the neighbouring
+  // candidates too. It only saves traversals (any blocker is a proof), so the
+  // races between threads on it do not change any result.
+  std::vector<std::atomic<std::uint64_t>> memo(2 * targets.size());
+  for (auto& m : memo) m.store(0, std::memory_order_relaxed);
+  const unsigned threads = thread_count(params.threads);
+  std::vector<BlockerCache> caches(threads, BlockerCache(tree));
+  std::atomic<std::size_t> scored{0};
+  const double cpu =
+      parallel_for(positions.size(), threads, 1, [&](std::size_t c, unsigned worker) {
+        const Point3& a = positions[c];
+        BlockerCache& cache = caches[worker];
+        cache.reset(a);
+        ScoringStats& st = per[c];
+        double sum = 0;
+        for (std::size_t i = 0; i < targets.size(); ++i) {
+          const Target& t = targets[i];
+          const double weight = params.method == 3 ? facing_area(t, a) : t.weight;
+          if (weight == 0 || !lim.in_view(a, t.center)) continue;
+          ++st.segments;
+          cache.aim(t.center);
+          if (cache.blocked_in_bin() ||
+              cache.passes_through(memo[2 * i].load(std::memory_order_relaxed)) ||
+              cache.passes_through(memo[2 * i + 1].load(std::memory_order_relaxed))) {
+            ++st.blocked_by_cache;
+            continue;
+          }
+          const Los los = params.method == 2 ? los_cells(tree, level, a, t, &cache)
+                                             : los_octants(tree, a, t.center, &cache);
+          if (los.blocker) {  // keep the last two
+            memo[2 * i + 1].store(memo[2 * i].load(std::memory_order_relaxed),
+                                  std::memory_order_relaxed);
+            memo[2 * i].store(los.blocker, std::memory_order_relaxed);
+          }
+          if (!los.visible) continue;
+          ++st.visible;
+          // Method 3: a frontier face in view is new surface whatever lies on the way.
+          sum += params.method == 3 ? weight : weight / (1.0 + double(los.n));
+        }
+        scores[c] = sum;
+        const std::size_t done = scored.fetch_add(1, std::memory_order_relaxed) + 1;
+        if (params.progress) params.progress(done, positions.size());
+      });
+  if (stats) {
+    *stats = ScoringStats{};
+    stats->targets = targets.size();
+    stats->cpu_seconds = cpu;
+    for (const ScoringStats& p : per) {
+      stats->segments += p.segments;
+      stats->blocked_by_cache += p.blocked_by_cache;
+      stats->visible += p.visible;
+    }
+  }
+  return scores;
+}
+
+}  // namespace
+
+std::vector<double> score_positions(const SemiOcTree& tree, const std::vector<Point3>& positions,
+                                    const NbvParams& params, ScoringStats* stats) {
+  return score_targets(tree, targets_for(tree, params), positions, params, stats);
+}
+
+double stop_percentage(const SemiOcTree& tree, const Point3& nbv, const ScannerView& limits,
+                       unsigned threads, const std::optional<RoomBox>& room) {
+  double total = 0;
+  if (room) {
+    tree.for_each_octant([&](const Octant& o) {
+      if (o.label() != Label::kUnknown) total += room->overlap(o.center, o.size);
+    });
+  } else {
+    const OctantStatistics stats = tree.statistics();
+    for (Label l : {Label::kOccluded, Label::kEmpty, Label::kOccupied, Label::kOut, Label::kDoor,
+                    Label::kWindow, Label::kScan, Label::kNbv})
+      total += stats.volume[static_cast<int>(l)];
+  }
+  if (total <= 0) return 0.0;
+  const std::vector<Target> targets = method1_targets(tree, room);
+  const ScannerLimits lim(limits);
+  // Each target's share seen: its Eq 4 term (1, 1/(1+n) or 0).
+  std::vector<double> share(targets.size(), 0.0);
+  parallel_for(targets.size(), thread_count(threads), 256, [&](std::size_t i, unsigned) {
+    if (!lim.in_view(nbv, targets[i].center)) return;
+    const Los los = los_octants(tree, nbv, targets[i].center);
+    if (los.visible) share[i] = 1.0 / (1.0 + double(los.n));
+  });
+  const double leaf_volume = std::pow(tree.leaf_size(), 3);
+  double seen = 0;
+  for (std::size_t i = 0; i < targets.size(); ++i)
+    seen += share[i] * targets[i].weight * leaf_volume;
+  return 100.0 * seen / total;
+}
+
+NbvResult next_best_view(const SemiOcTree& tree, const RobotGeometry& robot,
+                         const Point3& robot_position, const std::vector<Point3>& past_scans,
+                         const NbvParams& params) {
+  NbvResult res;
+  auto t0 = std::chrono::steady_clock::now();
+  const std::vector<Point3> positions =
+      find_candidates(tree, robot, robot_position, past_scans, params, &res.candidate_report);
+  res.seconds_candidates = seconds_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  const std::vector<Target> targets = targets_for(tree, params);
+  const std::vector<double> scores = score_targets(tree, targets, positions, params, &res.scoring);
+  res.candidates.reserve(positions.size());
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    res.candidates.push_back({positions[i], scores[i]});
+    if (!res.best || scores[i] > res.best->score) res.best = res.candidates.back();
+  }
+  res.seconds_scoring = seconds_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  if (res.best)
+    res.stop_percent =
+        stop_percentage(tree, res.best->position, params.limits, params.threads, params.room);
+  res.seconds_stop = seconds_since(t0);
+  return res;
+}
+
+}  // namespace semioctree
