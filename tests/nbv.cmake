@@ -1,4 +1,8 @@
 # Next-Best-View candidates, scores and the stop percentage (src/nbv/, docs/nbv.md).
+semioctree_add_test(test_nbv_scoring SOURCES test_nbv_scoring.cpp LIBS semioctree)
+target_include_directories(test_nbv_scoring PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+semioctree_add_test(test_nbv_candidates SOURCES test_nbv_candidates.cpp LIBS semioctree)
+target_include_directories(test_nbv_candidates PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
 semioctree_add_test(test_nbv SOURCES test_nbv.cpp LIBS semioctree)
 target_include_directories(test_nbv PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
 # The lab tests need the synthetic scanner for their input.
