@@ -15,4 +15,9 @@ semioctree_add_bench(bench_raycast SOURCES ${PROJECT_SOURCE_DIR}/tests/bench_ray
 foreach(t test_scene test_scanner)
   target_include_directories(${t} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
 endforeach()
-semioctree_add_test(test_coverage SOURCES ${PROJECT_SOURCE_DIR}/tests/test_coverage.cpp LIBS semioctree_sim)
+# Coverage (sim/src/coverage/): one test per module; test scenes in tests/support/coverage_scenes.h.
+foreach(module visibility reference cache measure misses plan)
+  semioctree_add_test(test_coverage_${module}
+    SOURCES ${PROJECT_SOURCE_DIR}/tests/test_coverage_${module}.cpp LIBS semioctree_sim)
+  target_include_directories(test_coverage_${module} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+endforeach()

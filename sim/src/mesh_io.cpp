@@ -16,6 +16,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "grid_cell_key.h"
 #include "semioctree/sim/mesh.h"
 
 namespace semioctree::sim {
@@ -162,9 +163,6 @@ TriangleMesh read_octomap_occupied(const std::string& path) {
 
   // Occupied space as a set of finest-level cells, so every face lies on one lattice and
   // neighbouring faces share vertices exactly (a watertight surface).
-  auto pack = [](std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-    return (static_cast<std::uint64_t>(x) << 42) | (static_cast<std::uint64_t>(y) << 21) | z;
-  };
   std::unordered_set<std::uint64_t> cells;
   std::vector<std::array<std::uint32_t, 3>> cell_list;
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
@@ -175,7 +173,7 @@ TriangleMesh read_octomap_occupied(const std::string& path) {
       for (std::uint32_t dy = 0; dy < n; ++dy)
         for (std::uint32_t dz = 0; dz < n; ++dz) {
           const std::array<std::uint32_t, 3> c{k[0] + dx + 1, k[1] + dy + 1, k[2] + dz + 1};
-          if (cells.insert(pack(c[0], c[1], c[2])).second) cell_list.push_back(c);
+          if (cells.insert(detail::grid_cell_key(c[0], c[1], c[2])).second) cell_list.push_back(c);
         }
   }
   if (cell_list.empty()) throw std::runtime_error(path + ": the octree has no occupied voxels");
@@ -185,7 +183,7 @@ TriangleMesh read_octomap_occupied(const std::string& path) {
   // Cell c (shifted by +1 above so that c − 1 never underflows) spans
   // [(c − 1 − 32768)·res, (c − 32768)·res) on each axis.
   auto corner = [&](std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-    const std::uint64_t key = pack(x, y, z);
+    const std::uint64_t key = detail::grid_cell_key(x, y, z);
     auto found = corner_ids.find(key);
     if (found != corner_ids.end()) return found->second;
     const int id = static_cast<int>(mesh.vertices.size());
@@ -200,7 +198,7 @@ TriangleMesh read_octomap_occupied(const std::string& path) {
       for (int side = 0; side < 2; ++side) {
         std::array<std::uint32_t, 3> nb = c;
         nb[axis] = side ? nb[axis] + 1 : nb[axis] - 1;
-        if (cells.count(pack(nb[0], nb[1], nb[2]))) continue;
+        if (cells.count(detail::grid_cell_key(nb[0], nb[1], nb[2]))) continue;
         // The face on plane `axis` = c[axis] + side, spanned by the two other axes.
         const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
         std::array<int, 4> q;

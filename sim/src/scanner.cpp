@@ -8,7 +8,8 @@
 #include <random>
 #include <stdexcept>
 #include <string>
-#include <thread>
+
+#include "parallel.h"
 
 namespace semioctree::sim {
 
@@ -148,17 +149,8 @@ Scan scan(const RayCaster& caster, const ScannerConfig& config, const Pose2& pos
       if (report && options.progress && done % 64 == 0) options.progress(done, g.rows);
     }
   };
-  unsigned threads =
-      options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
-  threads = std::min<unsigned>(threads, g.rows);
-  // Runs `job(is_calling_thread)` on `threads` threads, the calling one included.
-  auto run_parallel = [threads](auto job) {
-    std::vector<std::thread> pool;
-    for (unsigned t = 1; t < threads; ++t) pool.emplace_back(job, false);
-    job(true);
-    for (auto& t : pool) t.join();
-  };
-  run_parallel(work);
+  const unsigned threads = std::min<unsigned>(detail::thread_count(options.threads), g.rows);
+  detail::run_on_threads(threads, work);
   if (options.progress) options.progress(g.rows, g.rows);
 
   // Gather the rows in grid order, in parallel as well (a fine scan is ~100 MB).
@@ -170,7 +162,7 @@ Scan scan(const RayCaster& caster, const ScannerConfig& config, const Pose2& pos
   out.col.resize(total);
   if (options.with_intensity) out.intensity.resize(total);
   std::atomic<std::uint32_t> next_copy{0};
-  run_parallel([&](bool) {
+  detail::run_on_threads(threads, [&](bool) {
     for (std::uint32_t r = next_copy++; r < g.rows; r = next_copy++) {
       RowResult& row = rows[r];
       std::copy(row.points.begin(), row.points.end(),

@@ -1,50 +1,29 @@
-// Survey coverage: the reference of visible surface samples (what it leaves out and why),
-// the measure against a scan, and the per-scene cache.
+// The coverage reference: the grid of scan positions and the visible surface samples
+// (what it leaves out and why), on the test scenes and the lab.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <limits>
 #include <string>
+#include <vector>
 
-#include "semioctree/sim/coverage.h"
+#include "semioctree/sim/coverage/measure.h"
+#include "semioctree/sim/coverage/reference.h"
+#include "semioctree/sim/coverage/visibility.h"
 #include "semioctree/sim/ground_truth.h"
-#include "semioctree/sim/scanner.h"
 #include "semioctree/sim/scene.h"
+#include "support/coverage_scenes.h"
 
 namespace {
 
 using namespace semioctree::sim;
-namespace fs = std::filesystem;
-
-const std::string kScenes = SEMIOCTREE_SOURCE_DIR "/sim/scenes";
-
-Scene load(const std::string& name) {
-  return load_scene_json(kScenes + "/" + name + ".scene.json");
-}
+using namespace semioctree::testing;
 
 bool sanitized() {
   return std::getenv("SEMIOCTREE_SANITIZED") != nullptr;
-}
-
-// A directory of this test process's own, removed at exit.
-const fs::path& scratch() {
-  static const struct Dir {
-    fs::path path =
-        fs::temp_directory_path() / ("semioctree_test_coverage_" + std::to_string(::getpid()));
-    Dir() { fs::create_directories(path); }
-    ~Dir() {
-      std::error_code ec;
-      fs::remove_all(path, ec);
-    }
-  } dir;
-  return dir.path;
 }
 
 // Membership of every sample in the reference.
@@ -52,20 +31,6 @@ std::vector<bool> visible_flags(const CoverageReference& ref) {
   std::vector<bool> in(ref.sample_count, false);
   for (std::uint32_t i : ref.visible) in[i] = true;
   return in;
-}
-
-// World-frame points of one full scan from the robot's start.
-std::vector<Eigen::Vector3d> scan_from_start(const GroundTruth& truth, std::uint64_t seed = 1) {
-  const Scene& s = truth.scene();
-  ScanOptions o;
-  o.seed = seed;
-  const Scan sc = scan(truth.ray_caster(), s.scanner,
-                       {s.robot.start.x(), s.robot.start.y(), s.robot.start_yaw_deg}, o);
-  std::vector<Eigen::Vector3d> out;
-  out.reserve(sc.points.size());
-  const Eigen::Isometry3d to_world = sc.sensor_to_world();
-  for (const auto& p : sc.points) out.push_back(to_world * p.cast<double>());
-  return out;
 }
 
 bool in_rect(const Eigen::Vector3d& p, double x0, double x1, double y0, double y1,
@@ -117,8 +82,6 @@ bool seen_by_scanner(const GroundTruth& truth, const SurfaceSample& s,
     if (sample_in_line_of_sight(truth, s, c)) return true;
   return false;
 }
-
-// --- the reference ------------------------------------------------------------------
 
 TEST(CoverageReference, BoxRoomHoldsTheInnerWallFacesAndNotTheOuterOnes) {
   const GroundTruth truth(load("box-room"));
@@ -173,65 +136,6 @@ TEST(CoverageReference, AgreesWithTheVisibilityRuleSampleBySample) {
     EXPECT_EQ(any, in[i]) << samples[i].position.transpose();
   }
   EXPECT_GT(checked, 500u);
-}
-
-TEST(CoverageReference, ASegmentPassesThroughAnOpeningWhenItCrossesBothFacesOfTheHole) {
-  const Scene scene = load("one-door-window");
-  // The window: south wall y -0.2 .. 0, x 1.9 .. 3.4, z 0.9 .. 2.1. The door: east wall
-  // x 6.0 .. 6.2, y 0.9 .. 1.8, z 0 .. 2.05.
-  const Eigen::Vector3d c(2.65, 2.0, 1.5);
-  auto through = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-    const bool ab = segment_through_opening(scene, a, b);
-    EXPECT_EQ(ab, segment_through_opening(scene, b, a)) << a.transpose() << " | " << b.transpose();
-    return ab;
-  };
-  EXPECT_TRUE(through(c, {2.65, -3.0, 1.5}));  // straight out of the window
-  EXPECT_TRUE(through(c, {1.0, -3.0, 1.0}));   // slanting: x 1.99 at y = 0, 1.92 at y = -0.2
-  EXPECT_TRUE(through({5.0, 1.35, 1.0}, {8.0, 1.35, 1.0}));  // out of the door
-  EXPECT_TRUE(through({5.0, 1.0, 1.8}, {9.0, 1.7, 2.0}));
-  // Through the wall beside, above or below the hole: not through the opening.
-  EXPECT_FALSE(through(c, {2.65, -3.0, 4.0}));                // y = 0 at z 2.5
-  EXPECT_FALSE(through(c, {-1.0, -3.0, 1.5}));                // y = 0 at x 1.19
-  EXPECT_FALSE(through(c, {2.65, -3.0, -0.5}));               // y = 0 at z 0.7
-  EXPECT_FALSE(through({5.0, 1.35, 1.0}, {8.0, 1.35, 4.0}));  // in at z 2.0, out at 2.2: lintel
-  // Ends inside the hole: on the west jamb (x 1.9, normal +x), the sill, the lintel; or
-  // short of the wall.
-  EXPECT_FALSE(through(c, {1.905, -0.1, 1.5}));
-  EXPECT_FALSE(through(c, {1.905, -0.195, 1.0}));
-  EXPECT_FALSE(through(c, {2.65, -0.15, 0.905}));
-  EXPECT_FALSE(through(c, {2.65, -0.199, 2.095}));
-  EXPECT_FALSE(through({5.0, 1.35, 1.0}, {6.1, 0.905, 1.0}));  // door jamb
-  EXPECT_FALSE(through(c, {2.65, 0.5, 1.5}));
-  // Ends on a face plane of the wall cross one face only.
-  EXPECT_FALSE(through(c, {2.65, -0.2, 1.5}));
-  EXPECT_FALSE(through({2.65, 0.0, 1.5}, {2.65, -3.0, 1.5}));
-  // Both ends on the same side, the segment parallel to the wall inside the hole.
-  EXPECT_FALSE(through({2.0, -0.1, 1.5}, {3.0, -0.1, 1.5}));
-  EXPECT_FALSE(through(c, {5.0, 3.0, 1.0}));
-}
-
-TEST(CoverageReference, RuleHonoursRangeElevationAndFacing) {
-  Scene scene = load("box-room");
-  const GroundTruth truth(scene);
-  // A sample on the south wall's inner face (normal +y) at (3, 0, z).
-  SurfaceSample s;
-  s.normal = Eigen::Vector3d::UnitY();
-  s.position = {3.0, 0.0, 1.0};
-  EXPECT_TRUE(sample_visible_from(truth, s, {3.0, 2.0, 1.5}));
-  // Behind the face: not facing.
-  SurfaceSample back = s;
-  back.normal = -back.normal;
-  EXPECT_FALSE(sample_visible_from(truth, back, {3.0, 2.0, 1.5}));
-  // Closer than min_range (0.6 m).
-  EXPECT_FALSE(sample_visible_from(truth, s, {3.0, 0.5, 1.2}));
-  // Below elevation_min_deg (-60°): the wall foot 0.5 m away, 1.5 m down (-71.6°).
-  s.position.z() = 0.01;
-  EXPECT_FALSE(sample_visible_from(truth, s, {3.0, 0.5, 1.5}));
-  EXPECT_TRUE(sample_visible_from(truth, s, {3.0, 1.0, 1.5}));  // -56°
-  // Beyond max_range.
-  scene.scanner.max_range = 1.5;
-  const GroundTruth short_range(scene);
-  EXPECT_FALSE(sample_visible_from(short_range, s, {3.0, 2.0, 1.5}));
 }
 
 // The box room with a closed closet in its north-east corner (no door) and a cabinet
@@ -437,286 +341,6 @@ TEST(CoverageReference, LeavesOutWhatIsSeenOnlyThroughAnOpening) {
   EXPECT_EQ(opening_in, opening_scanned);
   EXPECT_GE(opening_in, opening * 99 / 100) << opening_in << " of " << opening;
 }
-
-// --- the measure --------------------------------------------------------------------
-
-TEST(Coverage, CountsSamplesWithAPointWithinTheTolerance) {
-  CoverageReference ref;
-  for (double x : {-1.0, -0.0149, 0.0, 0.0151, 2.0}) ref.points.emplace_back(x, -0.5, 10.0);
-  ref.points.emplace_back(5.0, 5.0, 5.0);
-  const Coverage none = measure_coverage(ref, std::vector<Eigen::Vector3d>{});
-  EXPECT_EQ(none.reference_points, 6u);
-  EXPECT_EQ(none.covered, 0u);
-  EXPECT_EQ(none.percent, 0.0);
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  const std::vector<Eigen::Vector3d> measured = {
-      {-1.0 + 0.029, -0.5, 10.0},               // 2.9 cm from -1.0, in the next cell
-      {2.0, -0.5 + 0.031, 10.0},                // 3.1 cm from 2.0
-      {0.0, -0.5, 10.0},                        // 1.49, 0 and 1.51 cm from three samples
-      {5.0 + 0.017, 5.0 + 0.017, 5.0 + 0.017},  // 2.94 cm from (5, 5, 5)
-      {nan, -0.5, 10.0}};
-  const Coverage c = measure_coverage(ref, measured);
-  // Everything but 2.0 is covered.
-  EXPECT_EQ(c.covered, 5u);
-  EXPECT_NEAR(c.percent, 500.0 / 6.0, 1e-9);
-  // At 2.85 cm, -1.0 (2.9 cm) and (5, 5, 5) (2.94 cm) drop out too.
-  EXPECT_EQ(measure_coverage(ref, measured, 0.0285).covered, 3u);
-  std::vector<Eigen::Vector3f> as_float;
-  for (const auto& p : measured) as_float.push_back(p.cast<float>());
-  EXPECT_EQ(measure_coverage(ref, as_float, 0.0285).covered, 3u);
-  // The flags behind those counts, sample by sample.
-  EXPECT_EQ(covered_samples(ref, as_float),
-            (std::vector<bool>{true, true, true, true, false, true}));
-  EXPECT_EQ(count_covered(covered_samples(ref, as_float)).covered, c.covered);
-  EXPECT_EQ(covered_samples(ref, as_float, 0.0285),
-            (std::vector<bool>{false, true, true, true, false, false}));
-  EXPECT_EQ(measure_coverage(CoverageReference{}, measured).percent, 0.0);
-}
-
-TEST(Coverage, AFullScanOfTheEmptyBoxRoomCoversItsReference) {
-  // box-room: walls, floor and ceiling only (no furniture), a convex room: one scan
-  // from the start sees every inner wall face the reference holds.
-  const GroundTruth truth(load("box-room"));
-  ASSERT_TRUE(truth.scene().boxes.empty() && truth.scene().cylinders.empty() &&
-              truth.scene().meshes.empty());
-  const CoverageReference ref = compute_coverage_reference(truth, 0.5, 0.02);
-  const std::vector<Eigen::Vector3d> points = scan_from_start(truth);
-  ASSERT_GT(points.size(), 100000u);
-  const Coverage full = measure_coverage(ref, points);
-  std::cout << "box-room, one scan from the start: " << full.covered << " of "
-            << full.reference_points << " = " << full.percent << " %\n";
-  EXPECT_EQ(full.reference_points, ref.visible.size());
-  EXPECT_GE(full.percent, 99.0);
-
-  EXPECT_EQ(measure_coverage(ref, std::vector<Eigen::Vector3f>{}).percent, 0.0);
-
-  // 5 cm along x: the points of the east and west walls leave their faces by 5 cm,
-  // those of the north and south walls slide along them (about 60 % of the walls' area).
-  std::vector<Eigen::Vector3d> shifted = points;
-  for (auto& p : shifted) p.x() += 0.05;
-  const Coverage along_x = measure_coverage(ref, shifted);
-  EXPECT_LT(along_x.percent, full.percent - 30.0) << along_x.percent;
-  // 5 cm diagonally in the xy-plane: every wall's points are 3.5 cm off its face.
-  shifted = points;
-  const Eigen::Vector3d diagonal = Eigen::Vector3d(1, 1, 0).normalized() * 0.05;
-  for (auto& p : shifted) p += diagonal;
-  const Coverage diag = measure_coverage(ref, shifted);
-  std::cout << "shifted 5 cm: along x " << along_x.percent << " %, diagonally " << diag.percent
-            << " %\n";
-  EXPECT_LT(diag.percent, 5.0);
-}
-
-TEST(Coverage, MissedSamplesAreSplitIntoSparselySampledAndHidden) {
-  // box-room with a crate east of the start: its east face looks away from the scanner.
-  Scene scene = load("box-room");
-  Box crate;  // x 3.7 .. 4.3, y 1.7 .. 2.3, z 0 .. 1
-  crate.center = {4.0, 2.0, 0.5};
-  crate.size = {0.6, 0.6, 1.0};
-  crate.name = "crate";
-  scene.boxes.push_back(crate);
-  const GroundTruth truth(scene);
-  const CoverageReference ref = compute_coverage_reference(truth, 0.5, 0.02);
-  const std::vector<SurfaceSample> samples = truth.surface_samples(0.02);
-  const Eigen::Vector3d centre(scene.robot.start.x(), scene.robot.start.y(), scene.scanner.height);
-  const std::vector<Eigen::Vector3d> points = scan_from_start(truth);
-  std::vector<Eigen::Vector3f> measured;
-  for (const auto& p : points) measured.push_back(p.cast<float>());
-  const std::vector<bool> covered = covered_samples(ref, measured);
-  const std::size_t n_covered = std::size_t(std::count(covered.begin(), covered.end(), true));
-
-  const MissedSamples full = explain_missed_samples(truth, ref, covered, {centre}, 2);
-  EXPECT_EQ(full.in_view + full.hidden, ref.visible.size() - n_covered);
-  // The crate's east face, away from its edges (a point on the top or a side face can lie
-  // within 3 cm of a sample near an edge): faces away from the scanner, so hidden.
-  std::size_t east_face = 0;
-  for (std::uint32_t i : ref.visible) {
-    const SurfaceSample& s = samples[i];
-    if (s.part.kind == PartKind::box && s.normal.x() > 0.99 && s.position.z() < 0.95 &&
-        s.position.y() > 1.75 && s.position.y() < 2.25)
-      ++east_face;
-  }
-  ASSERT_GT(east_face, 500u);  // 0.4 x 0.95 m at 2 cm
-  ASSERT_FALSE(full.parts.empty());
-  const auto crate_part =
-      std::find_if(full.parts.begin(), full.parts.end(),
-                   [](const MissedPart& p) { return p.label == "boxes[0] (crate)"; });
-  ASSERT_NE(crate_part, full.parts.end());
-  EXPECT_GE(crate_part->hidden, east_face);
-  for (std::size_t k = 1; k < full.parts.size(); ++k)
-    EXPECT_GE(full.parts[k - 1].in_view + full.parts[k - 1].hidden,
-              full.parts[k].in_view + full.parts[k].hidden);
-  std::size_t by_part = 0;
-  for (const MissedPart& p : full.parts) by_part += p.in_view + p.hidden;
-  EXPECT_EQ(by_part, full.in_view + full.hidden);
-  // A small convex room at 0.2°: what the scan sees it samples densely enough.
-  EXPECT_LT(full.in_view, full.hidden / 10) << full.in_view << " in view, " << full.hidden;
-
-  // One point in 25 kept: the same view, sampled five times more sparsely each way.
-  std::vector<Eigen::Vector3f> sparse;
-  for (std::size_t i = 0; i < measured.size(); i += 25) sparse.push_back(measured[i]);
-  const std::vector<bool> covered_sparse = covered_samples(ref, sparse);
-  const MissedSamples thin = explain_missed_samples(truth, ref, covered_sparse, {centre}, 1);
-  EXPECT_GT(thin.in_view, 10 * full.in_view + ref.visible.size() / 10);
-  EXPECT_GE(thin.hidden, full.hidden);
-  EXPECT_LT(thin.hidden, full.hidden + ref.visible.size() / 100);
-
-  // Without any scan position every missed sample is hidden.
-  const MissedSamples none = explain_missed_samples(truth, ref, covered, {});
-  EXPECT_EQ(none.in_view, 0u);
-  EXPECT_EQ(none.hidden, ref.visible.size() - n_covered);
-
-  EXPECT_THROW(explain_missed_samples(truth, ref, std::vector<bool>(3), {centre}),
-               std::invalid_argument);
-  EXPECT_THROW(explain_missed_samples(GroundTruth(load("box-room")), ref, covered, {centre}),
-               std::invalid_argument);
-  EXPECT_EQ(part_label(scene, {PartKind::wall, 1}), "walls[1]");
-  EXPECT_EQ(part_label(scene, {PartKind::box, 0}), "boxes[0] (crate)");
-}
-
-// --- the cache ----------------------------------------------------------------------
-
-// Six samples; from the first position nothing is seen. Greedy takes A (4 new)
-// then B (1 new; C too, B comes first) and covers 5; swapping A for C covers all.
-TEST(CoveragePlan, GreedyThenLocalSearch) {
-  auto set = [](std::initializer_list<int> members) {
-    std::vector<bool> s(6, false);
-    for (int i : members) s[std::size_t(i)] = true;
-    return s;
-  };
-  const std::vector<std::vector<bool>> covered = {set({}), set({0, 1, 2, 3}), set({0, 1, 4}),
-                                                  set({2, 3, 5})};
-  const CoveragePlan greedy = greedy_coverage_plan(covered, 0, 3);
-  EXPECT_EQ(greedy.views, (std::vector<std::size_t>{0, 1, 2}));
-  EXPECT_NEAR(greedy.percent, 500.0 / 6.0, 1e-9);
-  const CoveragePlan best = improve_coverage_plan(covered, greedy);
-  EXPECT_EQ(best.views, (std::vector<std::size_t>{0, 3, 2}));
-  EXPECT_NEAR(best.percent, 100.0, 1e-9);
-  // One scan: the first position alone.
-  EXPECT_NEAR(greedy_coverage_plan(covered, 1, 1).percent, 400.0 / 6.0, 1e-9);
-  EXPECT_THROW(greedy_coverage_plan(covered, 4, 2), std::invalid_argument);
-  EXPECT_THROW(greedy_coverage_plan({set({0}), std::vector<bool>(3)}, 0, 2), std::invalid_argument);
-}
-
-TEST(CoverageCache, RoundTripsAndIsKeyedByTheScene) {
-  const fs::path dir = scratch() / "roundtrip";
-  const GroundTruth truth(load("box-room"));
-  const CoverageReference first = load_or_compute_coverage_reference(truth, dir.string());
-  EXPECT_FALSE(first.from_cache);
-  ASSERT_FALSE(first.cache_file.empty());
-  EXPECT_TRUE(fs::exists(first.cache_file));
-  EXPECT_EQ(fs::path(first.cache_file).parent_path(), dir);
-  // Only the final file is left (the temporary was renamed).
-  std::size_t files = 0;
-  for (const auto& e : fs::directory_iterator(dir)) files += e.is_regular_file();
-  EXPECT_EQ(files, 1u);
-
-  const CoverageReference second = load_or_compute_coverage_reference(truth, dir.string());
-  EXPECT_TRUE(second.from_cache);
-  EXPECT_EQ(second.cache_file, first.cache_file);
-  EXPECT_EQ(second.visible, first.visible);
-  EXPECT_EQ(second.positions, first.positions);
-  EXPECT_EQ(second.points, first.points);
-  EXPECT_EQ(second.sample_count, first.sample_count);
-  EXPECT_EQ(second.segment_queries, 0u);
-  EXPECT_LT(second.seconds, first.seconds);
-  std::cout << "box-room reference: computed in " << first.seconds << " s, loaded in "
-            << second.seconds << " s\n";
-  // The computed and the cached results equal a plain computation.
-  EXPECT_EQ(compute_coverage_reference(truth).visible, first.visible);
-
-  // Same scene, same key; any parameter the reference depends on changes it.
-  const std::string key = coverage_cache_key(truth);
-  EXPECT_EQ(key, first.key);
-  EXPECT_EQ(key, coverage_cache_key(GroundTruth(load("box-room"))));
-  EXPECT_NE(key, coverage_cache_key(truth, 0.25));
-  EXPECT_NE(key, coverage_cache_key(truth, 0.5, 0.05));
-  Scene changed = load("box-room");
-  changed.scanner.height = 1.4;
-  EXPECT_NE(key, coverage_cache_key(GroundTruth(changed)));
-  changed = load("box-room");
-  changed.robot.radius = 0.4;
-  EXPECT_NE(key, coverage_cache_key(GroundTruth(changed)));
-  changed = load("box-room");
-  changed.walls[2].z1 = 2.7;  // geometry
-  EXPECT_NE(key, coverage_cache_key(GroundTruth(changed)));
-  changed = load("box-room");
-  changed.scanner.elevation_min_deg = -10;
-  const CoverageReference other =
-      load_or_compute_coverage_reference(GroundTruth(changed), dir.string());
-  EXPECT_FALSE(other.from_cache);
-  EXPECT_NE(other.cache_file, first.cache_file);
-  // Wall feet are more than 10° below every position within the room's 7.2 m diagonal.
-  EXPECT_LT(other.visible.size(), first.visible.size());
-}
-
-TEST(CoverageCache, ACorruptOrTruncatedFileIsRecomputed) {
-  const fs::path dir = scratch() / "corrupt";
-  const GroundTruth truth(load("one-door-window"));
-  const CoverageReference good = load_or_compute_coverage_reference(truth, dir.string(), 0.5, 0.05);
-  ASSERT_FALSE(good.cache_file.empty());
-  const auto size = fs::file_size(good.cache_file);
-  ASSERT_GT(size, 100u);
-  std::string bytes;
-  {
-    std::ifstream in(good.cache_file, std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), {});
-  }
-  ASSERT_EQ(bytes.size(), size);
-  auto write = [&](const std::string& data) {
-    std::ofstream out(good.cache_file, std::ios::binary | std::ios::trunc);
-    out.write(data.data(), static_cast<std::streamsize>(data.size()));
-  };
-  const std::string flipped = [&] {
-    std::string b = bytes;
-    b[b.size() / 2] = static_cast<char>(b[b.size() / 2] ^ 0x10);  // one bit in the indices
-    return b;
-  }();
-  for (const std::string& bad :
-       {bytes.substr(0, bytes.size() - 4), bytes.substr(0, bytes.size() / 2), flipped,
-        std::string(), std::string("not a cache file"), bytes + "x"}) {
-    write(bad);
-    const CoverageReference again =
-        load_or_compute_coverage_reference(truth, dir.string(), 0.5, 0.05);
-    EXPECT_FALSE(again.from_cache) << "a damaged file of " << bad.size() << " bytes was trusted";
-    EXPECT_EQ(again.visible, good.visible);
-    EXPECT_EQ(again.cache_file, good.cache_file);
-    // The file was rewritten whole.
-    EXPECT_EQ(fs::file_size(good.cache_file), size);
-    EXPECT_TRUE(load_or_compute_coverage_reference(truth, dir.string(), 0.5, 0.05).from_cache);
-  }
-}
-
-TEST(CoverageCache, AnUnwritableOrEmptyCacheDirectoryOnlyCostsTheCache) {
-  const fs::path blocker = scratch() / "not-a-directory";
-  std::ofstream(blocker) << "a file where the cache directory should be";
-  const GroundTruth truth(load("box-room"));
-  const CoverageReference plain = compute_coverage_reference(truth, 0.5, 0.05);
-  const CoverageReference unwritable =
-      load_or_compute_coverage_reference(truth, (blocker / "cache").string(), 0.5, 0.05);
-  EXPECT_FALSE(unwritable.from_cache);
-  EXPECT_TRUE(unwritable.cache_file.empty());
-  EXPECT_EQ(unwritable.visible, plain.visible);
-  const CoverageReference none = load_or_compute_coverage_reference(truth, "", 0.5, 0.05);
-  EXPECT_FALSE(none.from_cache);
-  EXPECT_TRUE(none.cache_file.empty());
-  EXPECT_EQ(none.visible, plain.visible);
-  EXPECT_EQ(none.key, plain.key);
-}
-
-TEST(CoverageCache, DefaultDirectoryFollowsXdgThenHome) {
-  const char* old_xdg = std::getenv("XDG_CACHE_HOME");
-  const std::string saved = old_xdg ? old_xdg : "";
-  ::setenv("XDG_CACHE_HOME", "/some/cache", 1);
-  EXPECT_EQ(default_cache_dir(), "/some/cache/semioctree");
-  ::unsetenv("XDG_CACHE_HOME");
-  const char* home = std::getenv("HOME");
-  if (home && home[0]) {
-    EXPECT_EQ(default_cache_dir(), std::string(home) + "/.cache/semioctree");
-  }
-  if (old_xdg) ::setenv("XDG_CACHE_HOME", saved.c_str(), 1);
-}
-
-// --- the lab (measured, reported) ---------------------------------------------------
 
 TEST(CoverageLab, ReferenceAndOneScanFromTheStart) {
   if (sanitized()) GTEST_SKIP() << "the lab reference is heavy under sanitizers";

@@ -1,0 +1,41 @@
+// The cache of coverage references: its key and its file format (internal; the layout is
+// described in docs/coverage.md, "The cache").
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "semioctree/sim/coverage/reference.h"
+#include "semioctree/sim/ground_truth.h"
+
+namespace semioctree::sim::detail {
+
+// Bump when the visibility rule, the grid of positions or the file layout changes: old
+// cache files then get another name and are never read. 2: nothing seen through an
+// opening; 3: reachable positions only.
+constexpr std::uint32_t kCoverageRuleVersion = 3;
+// The floor-plan cell coverage_grid_positions finds the survey area with (part of the key).
+constexpr double kCoveragePlanCell = 0.05;
+
+// The cache key (coverage_cache_key) of the reference of `truth` from its `samples`.
+std::string reference_key(const GroundTruth& truth, const std::vector<SurfaceSample>& samples,
+                          double grid_spacing, double sample_spacing);
+
+// `<cache_dir>/coverage-<key>.bin`.
+std::filesystem::path cache_file_path(const std::string& cache_dir, const std::string& key);
+
+// Reads `file` into ref.grid_spacing, sample_spacing, sample_count, positions and visible.
+// False (and `ref` unusable) unless it exists and its size, header, key, spacings, sample
+// count, checksum and indices all check out.
+bool read_cached_reference(const std::filesystem::path& file, const std::string& key,
+                           double grid_spacing, double sample_spacing, std::size_t sample_count,
+                           CoverageReference& ref);
+
+// Writes `ref` to `file` (a temporary name in the same directory, then renamed over it),
+// creating the directory. False if that fails; nothing is left behind then.
+bool write_cached_reference(const std::filesystem::path& file, const CoverageReference& ref);
+
+}  // namespace semioctree::sim::detail

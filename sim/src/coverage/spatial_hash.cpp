@@ -1,0 +1,85 @@
+// Points hashed by cubic cell (see spatial_hash.h).
+#include "coverage/spatial_hash.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <utility>
+
+#include "grid_cell_key.h"
+
+namespace semioctree::sim::detail {
+
+namespace {
+
+// The slot a key starts probing at (murmur3's 64-bit finalizer).
+std::uint64_t slot_hash(std::uint64_t x) {
+  x ^= x >> 33;
+  x *= 0xff51afd7ed558ccdull;
+  x ^= x >> 33;
+  x *= 0xc4ceb9fe1a85ec53ull;
+  return x ^ (x >> 33);
+}
+
+}  // namespace
+
+PointHash::PointHash(std::vector<Eigen::Vector3d> points, double cell) : cell_(cell) {
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
+  keyed.reserve(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    keyed.emplace_back(cell_key(points[i]), static_cast<std::uint32_t>(i));
+  std::sort(keyed.begin(), keyed.end());
+  points_.reserve(points.size());
+  for (const auto& k : keyed) points_.push_back(points[k.second]);
+  std::size_t capacity = 16;
+  std::size_t cells = 0;
+  for (std::size_t i = 0; i < keyed.size(); ++i)
+    if (i == 0 || keyed[i].first != keyed[i - 1].first) ++cells;
+  while (capacity < 2 * cells) capacity *= 2;
+  slots_.assign(capacity, Slot{});
+  for (std::size_t i = 0; i < keyed.size();) {
+    std::size_t j = i;
+    while (j < keyed.size() && keyed[j].first == keyed[i].first) ++j;
+    std::size_t h = slot_hash(keyed[i].first) & (capacity - 1);
+    while (slots_[h].count) h = (h + 1) & (capacity - 1);
+    slots_[h] = {keyed[i].first, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j - i)};
+    i = j;
+  }
+}
+
+bool PointHash::any_within(const Eigen::Vector3d& q, double radius) const {
+  if (slots_.empty()) return false;
+  const double r2 = radius * radius;
+  const long ix = index(q.x()), iy = index(q.y()), iz = index(q.z());
+  // Own cell first: it holds the match in most cases.
+  for (int pass = 0; pass < 2; ++pass)
+    for (long dz = -1; dz <= 1; ++dz)
+      for (long dy = -1; dy <= 1; ++dy)
+        for (long dx = -1; dx <= 1; ++dx) {
+          const bool own = dx == 0 && dy == 0 && dz == 0;
+          if (own != (pass == 0)) continue;
+          const Slot* s = find(grid_cell_key(ix + dx, iy + dy, iz + dz));
+          if (!s) continue;
+          for (std::uint32_t k = s->begin; k < s->begin + s->count; ++k)
+            if ((points_[k] - q).squaredNorm() <= r2) return true;
+        }
+  return false;
+}
+
+long PointHash::index(double v) const {
+  return static_cast<long>(std::floor(v / cell_));
+}
+
+std::uint64_t PointHash::cell_key(const Eigen::Vector3d& p) const {
+  return grid_cell_key(index(p.x()), index(p.y()), index(p.z()));
+}
+
+const PointHash::Slot* PointHash::find(std::uint64_t key) const {
+  const std::size_t mask = slots_.size() - 1;
+  for (std::size_t h = slot_hash(key) & mask;; h = (h + 1) & mask) {
+    if (!slots_[h].count) return nullptr;
+    if (slots_[h].key == key) return &slots_[h];
+  }
+}
+
+}  // namespace semioctree::sim::detail

@@ -1,0 +1,85 @@
+// Survey coverage: the reference samples with a measured point within the tolerance.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+#include <limits>
+#include <vector>
+
+#include "semioctree/sim/coverage/measure.h"
+#include "semioctree/sim/coverage/reference.h"
+#include "semioctree/sim/ground_truth.h"
+#include "support/coverage_scenes.h"
+
+namespace {
+
+using namespace semioctree::sim;
+using namespace semioctree::testing;
+
+TEST(Coverage, CountsSamplesWithAPointWithinTheTolerance) {
+  CoverageReference ref;
+  for (double x : {-1.0, -0.0149, 0.0, 0.0151, 2.0}) ref.points.emplace_back(x, -0.5, 10.0);
+  ref.points.emplace_back(5.0, 5.0, 5.0);
+  const Coverage none = measure_coverage(ref, std::vector<Eigen::Vector3d>{});
+  EXPECT_EQ(none.reference_points, 6u);
+  EXPECT_EQ(none.covered, 0u);
+  EXPECT_EQ(none.percent, 0.0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<Eigen::Vector3d> measured = {
+      {-1.0 + 0.029, -0.5, 10.0},               // 2.9 cm from -1.0, in the next cell
+      {2.0, -0.5 + 0.031, 10.0},                // 3.1 cm from 2.0
+      {0.0, -0.5, 10.0},                        // 1.49, 0 and 1.51 cm from three samples
+      {5.0 + 0.017, 5.0 + 0.017, 5.0 + 0.017},  // 2.94 cm from (5, 5, 5)
+      {nan, -0.5, 10.0}};
+  const Coverage c = measure_coverage(ref, measured);
+  // Everything but 2.0 is covered.
+  EXPECT_EQ(c.covered, 5u);
+  EXPECT_NEAR(c.percent, 500.0 / 6.0, 1e-9);
+  // At 2.85 cm, -1.0 (2.9 cm) and (5, 5, 5) (2.94 cm) drop out too.
+  EXPECT_EQ(measure_coverage(ref, measured, 0.0285).covered, 3u);
+  std::vector<Eigen::Vector3f> as_float;
+  for (const auto& p : measured) as_float.push_back(p.cast<float>());
+  EXPECT_EQ(measure_coverage(ref, as_float, 0.0285).covered, 3u);
+  // The flags behind those counts, sample by sample.
+  EXPECT_EQ(covered_samples(ref, as_float),
+            (std::vector<bool>{true, true, true, true, false, true}));
+  EXPECT_EQ(count_covered(covered_samples(ref, as_float)).covered, c.covered);
+  EXPECT_EQ(covered_samples(ref, as_float, 0.0285),
+            (std::vector<bool>{false, true, true, true, false, false}));
+  EXPECT_EQ(measure_coverage(CoverageReference{}, measured).percent, 0.0);
+}
+
+TEST(Coverage, AFullScanOfTheEmptyBoxRoomCoversItsReference) {
+  // box-room: walls, floor and ceiling only (no furniture), a convex room: one scan
+  // from the start sees every inner wall face the reference holds.
+  const GroundTruth truth(load("box-room"));
+  ASSERT_TRUE(truth.scene().boxes.empty() && truth.scene().cylinders.empty() &&
+              truth.scene().meshes.empty());
+  const CoverageReference ref = compute_coverage_reference(truth, 0.5, 0.02);
+  const std::vector<Eigen::Vector3d> points = scan_from_start(truth);
+  ASSERT_GT(points.size(), 100000u);
+  const Coverage full = measure_coverage(ref, points);
+  std::cout << "box-room, one scan from the start: " << full.covered << " of "
+            << full.reference_points << " = " << full.percent << " %\n";
+  EXPECT_EQ(full.reference_points, ref.visible.size());
+  EXPECT_GE(full.percent, 99.0);
+
+  EXPECT_EQ(measure_coverage(ref, std::vector<Eigen::Vector3f>{}).percent, 0.0);
+
+  // 5 cm along x: the points of the east and west walls leave their faces by 5 cm,
+  // those of the north and south walls slide along them (about 60 % of the walls' area).
+  std::vector<Eigen::Vector3d> shifted = points;
+  for (auto& p : shifted) p.x() += 0.05;
+  const Coverage along_x = measure_coverage(ref, shifted);
+  EXPECT_LT(along_x.percent, full.percent - 30.0) << along_x.percent;
+  // 5 cm diagonally in the xy-plane: every wall's points are 3.5 cm off its face.
+  shifted = points;
+  const Eigen::Vector3d diagonal = Eigen::Vector3d(1, 1, 0).normalized() * 0.05;
+  for (auto& p : shifted) p += diagonal;
+  const Coverage diag = measure_coverage(ref, shifted);
+  std::cout << "shifted 5 cm: along x " << along_x.percent << " %, diagonally " << diag.percent
+            << " %\n";
+  EXPECT_LT(diag.percent, 5.0);
+}
+
+}  // namespace
