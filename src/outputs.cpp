@@ -50,15 +50,32 @@ void write_map_files(const SemiOcTree& tree, const std::string& dir, const Slice
   write_slice_png(tree, (d / names.slice).string(), slice);
 }
 
-void write_cloud_ply(const Cloud& cloud, const std::string& path) {
+void write_ply(const std::string& path, std::size_t count, const PlyLayout& layout,
+               const std::function<PlyVertex(std::size_t)>& vertex) {
   static_assert(sizeof(float) == 4, "PLY float is 4 bytes");
   write_file_atomically(path, [&](std::ostream& os) {
-    os << "ply\nformat binary_little_endian 1.0\ncomment semioctree merged cloud\nelement vertex "
-       << cloud.size() << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
-    for (const auto& p : cloud) {  // x86: already little-endian
-      const float xyz[3] = {p.x, p.y, p.z};
+    os << "ply\nformat binary_little_endian 1.0\ncomment " << layout.comment << "\nelement vertex "
+       << count << "\nproperty float x\nproperty float y\nproperty float z\n";
+    if (layout.colour) os << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+    if (!layout.flag.empty()) os << "property uchar " << layout.flag << "\n";
+    os << "end_header\n";
+    for (std::size_t i = 0; i < count; ++i) {  // x86: already little-endian
+      const PlyVertex v = vertex(i);
+      const float xyz[3] = {v.x, v.y, v.z};
       os.write(reinterpret_cast<const char*>(xyz), sizeof xyz);
+      if (layout.colour) {
+        const std::uint8_t rgb[3] = {v.red, v.green, v.blue};
+        os.write(reinterpret_cast<const char*>(rgb), sizeof rgb);
+      }
+      if (!layout.flag.empty()) os.write(reinterpret_cast<const char*>(&v.flag), 1);
     }
+  });
+}
+
+void write_cloud_ply(const Cloud& cloud, const std::string& path) {
+  write_ply(path, cloud.size(), {"semioctree merged cloud", false, ""}, [&](std::size_t i) {
+    const auto& p = cloud[i];
+    return PlyVertex{p.x, p.y, p.z};
   });
 }
 

@@ -19,6 +19,8 @@
 #include <sstream>
 #include <vector>
 
+#include "semioctree/timing.h"
+
 namespace semioctree {
 
 namespace {
@@ -168,7 +170,7 @@ Eigen::Isometry3d planar_pose(double x, double y, double yaw_deg) {
 
 RegistrationResult register_scan(const Cloud& source, const Cloud& target,
                                  const RegistrationParams& p) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = Clock::now();
   if (!(p.voxel > 0) || !(p.final_correspondence > 0) ||
       !(p.max_correspondence >= p.final_correspondence) || p.max_iterations < 1)
     throw std::invalid_argument(
@@ -299,7 +301,7 @@ RegistrationResult register_scan(const Cloud& source, const Cloud& target,
       Eigen::Quaterniond(r.correction.rotation()).normalized().toRotationMatrix();
   r.translation_m = r.correction.translation().norm();
   r.rotation_deg = Eigen::AngleAxisd(r.correction.rotation()).angle() * 180.0 / M_PI;
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.seconds = seconds_since(t0);
 
   if (!(r.fitness <= p.max_fitness) || r.overlap < p.min_overlap)
     throw RegistrationError("registration failed the bounds: " + describe(r, p));

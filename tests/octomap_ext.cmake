@@ -13,8 +13,13 @@ target_compile_definitions(test_cli PRIVATE SEMIOCTREE_VERSION="${PROJECT_VERSIO
 add_dependencies(test_cli semioctree_cli)
 
 # The installed CMake package works for an outside project.
+set(SEMIOCTREE_INSTALL_TEST_SIM OFF)  # the survey example needs the simulator
+if(TARGET semioctree_sim_platform)
+  set(SEMIOCTREE_INSTALL_TEST_SIM ON)
+endif()
 add_test(NAME install_package
          COMMAND ${CMAKE_COMMAND} -DBUILD_DIR=${PROJECT_BINARY_DIR} -DSOURCE_DIR=${PROJECT_SOURCE_DIR}
+                 -DWITH_SIM=${SEMIOCTREE_INSTALL_TEST_SIM}
                  -DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR}/install_package
                  -P ${CMAKE_CURRENT_SOURCE_DIR}/install_consumer/run.cmake)
 set_tests_properties(install_package PROPERTIES TIMEOUT 600)

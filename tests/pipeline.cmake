@@ -30,3 +30,7 @@ endif()
 if(TARGET test_figures)
   target_link_libraries(test_figures PRIVATE nlohmann_json::nlohmann_json)
 endif()
+# The survey stage from the library, with the simulated platform.
+if(TARGET semioctree_sim_platform)
+  semioctree_add_test(test_survey_stage SOURCES test_survey_stage.cpp LIBS semioctree_sim_platform)
+endif()

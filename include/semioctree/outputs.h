@@ -3,6 +3,8 @@
 // occupancy map and the slice image. Each is written atomically.
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -32,6 +34,21 @@ void write_map_files(const SemiOcTree& tree, const std::string& dir, const Slice
 // A copy of `tree` with those markers (what the .ot files hold).
 std::unique_ptr<SemiOcTree> with_markers(const SemiOcTree& tree, const std::vector<Point3>& scans,
                                          const std::optional<Point3>& nbv);
+
+// One vertex of a PLY file: its position, and its colour and flag if the layout has them.
+struct PlyVertex {
+  float x = 0, y = 0, z = 0;
+  std::uint8_t red = 0, green = 0, blue = 0, flag = 0;
+};
+struct PlyLayout {
+  std::string comment;  // one line
+  bool colour = false;  // uchar red, green, blue
+  std::string flag;     // name of a uchar property (empty: none)
+};
+// Binary little-endian PLY of `count` vertices, vertex(i) each (x y z as float, then the
+// layout's uchar properties), written atomically. Throws FileError.
+void write_ply(const std::string& path, std::size_t count, const PlyLayout& layout,
+               const std::function<PlyVertex(std::size_t)>& vertex);
 
 // Binary little-endian PLY of the points (x y z as float), written atomically;
 // CloudCompare, PCL and MeshLab read it. Throws FileError.

@@ -9,6 +9,7 @@
 #include "semioctree/scan_io.h"
 #include "semioctree/update.h"
 #ifdef SEMIOCTREE_HAVE_SIM
+#include "semioctree/timing.h"
 #include "sim_input.h"
 #endif
 
@@ -28,7 +29,7 @@ PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& param
   std::vector<Eigen::Vector3d> origins;
   std::vector<std::pair<Cloud::Ptr, Eigen::Matrix3d>> returns;  // scanner frame, rotation
   for (std::size_t i = 0; i < in.files.size(); ++i) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = Clock::now();
     std::vector<Scan> scans = read_scans(in.files[i]);
     for (Scan& s : scans) {
       if (!in.poses.empty())
@@ -48,12 +49,11 @@ PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& param
           "read %s: %zu points (%zu invalid, %zu outside the scanner's limits dropped), scanner "
           "at (%.2f, %.2f, %.2f) [%.2f s]\n",
           s.source.c_str(), s.points->size(), s.invalid_dropped, outside, s.pose.position().x(),
-          s.pose.position().y(), s.pose.position().z(),
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+          s.pose.position().y(), s.pose.position().z(), seconds_since(t0));
     }
   }
   std::fflush(stdout);
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = Clock::now();
   out.pre = preprocess(merged, params);
   for (const auto& o : origins) {
     const Eigen::Vector3d p = out.pre.transform * o;
@@ -71,7 +71,7 @@ PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& param
       r.decimation_spacing > 0
           ? (" (decimated at " + std::to_string(r.decimation_spacing).substr(0, 6) + " m)").c_str()
           : "",
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      seconds_since(t0));
   std::fflush(stdout);
   return out;
 }

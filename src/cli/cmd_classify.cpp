@@ -13,6 +13,7 @@
 #include "semioctree/occlusion.h"
 #include "semioctree/openings.h"
 #include "semioctree/outputs.h"
+#include "semioctree/timing.h"
 
 namespace semioctree::cli {
 
@@ -46,11 +47,11 @@ void add_classify_command(CLI::App& app) {
   cmd->callback([o] {
     SemiOcTree::coarse_level_for(o->disc.leaf, o->disc.coarse);
     const PreparedCloud cloud = prepare(o->source, "classify", &o->limits);
-    auto t0 = std::chrono::steady_clock::now();
+    auto t0 = Clock::now();
     const auto tree = discretize(*cloud.pre.cloud, cloud.pre.ceiling_height, o->disc);
     std::printf("discretize: %zu coarse voxels [%.2f s]\n", tree->coarse_count(),
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-    t0 = std::chrono::steady_clock::now();
+                seconds_since(t0));
+    t0 = Clock::now();
     OpeningsReport orep;
     const auto openings = detect_openings(*cloud.pre.cloud, cloud.pre.ceiling_height, *tree,
                                           cloud.scanners, OpeningParams{}, &orep);
@@ -59,16 +60,15 @@ void add_classify_command(CLI::App& app) {
         "openings: %zu walls, %zu candidates, %zu confirmed, %zu rejected as occlusion shadows "
         "[%.2f s]\n",
         orep.walls.size(), orep.candidates, openings.size(), orep.rejected.size(),
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        seconds_since(t0));
     for (const auto& op : openings)
       std::printf("  %-6s %.2f x %.2f m, sill %.2f m, line of sight %.0f %%\n", to_string(op.kind),
                   op.width, op.height, op.sill, 100 * op.los_fraction);
-    t0 = std::chrono::steady_clock::now();
+    t0 = Clock::now();
     const OcclusionReport rep =
         study_occlusion(*tree, scanner_views(cloud.scanners, o->limits, cloud.returns));
     tree->compact();
-    const DiscretizationRun run = describe_run(
-        *tree, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    const DiscretizationRun run = describe_run(*tree, seconds_since(t0));
     std::printf(
         "occlusion study: %zu octants tested, %zu split, %zu segments; empty %.1f %%, occupied "
         "%.1f %%, "

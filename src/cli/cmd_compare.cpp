@@ -14,6 +14,7 @@
 #include "semioctree/occlusion.h"
 #include "semioctree/openings.h"
 #include "semioctree/outputs.h"
+#include "semioctree/timing.h"
 
 namespace semioctree::cli {
 
@@ -57,14 +58,13 @@ void add_compare_command(CLI::App& app) {
         std::printf("%-11s %5.2f → %4.2f m: discretize, openings, occlusion study ...\n", method,
                     p.coarse, leaf);
         std::fflush(stdout);
-        const auto t0 = std::chrono::steady_clock::now();
+        const auto t0 = Clock::now();
         const auto tree = discretize(*cloud.pre.cloud, cloud.pre.ceiling_height, p);
         // Table 1 needs every class: doors and windows, then the occlusion study.
         label_openings(*tree, detect_openings(*cloud.pre.cloud, cloud.pre.ceiling_height, *tree,
                                               cloud.scanners));
         study_occlusion(*tree, scanner_views(cloud.scanners, o->limits, cloud.returns));
-        DiscretizationRun run = describe_run(
-            *tree, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        DiscretizationRun run = describe_run(*tree, seconds_since(t0));
         run.method = method;  // k = 0 at the coarsest leaf would read as homogeneous
         std::printf("%-11s %5.2f → %4.2f m: %9llu octants, %7.1f MB [%.2f s]\n", method, p.coarse,
                     leaf, static_cast<unsigned long long>(run.stats.total()),

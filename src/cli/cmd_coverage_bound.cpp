@@ -20,6 +20,7 @@
 #include "semioctree/sim/ground_truth.h"
 #include "semioctree/sim/scanner.h"
 #include "semioctree/sim/scene.h"
+#include "semioctree/timing.h"
 
 namespace semioctree::cli {
 
@@ -44,7 +45,7 @@ nlohmann::json plan_json(const sim::CoveragePlan& plan,
 
 void run_coverage_bound(const CoverageBoundArgs& a) {
   if (a.max_scans < 1) throw std::invalid_argument("--max-scans must be at least 1");
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = Clock::now();
   const sim::Scene scene = sim::load_scene(a.scene);
   const sim::GroundTruth truth(scene);
   const std::string cache = a.cache.empty() ? sim::default_cache_dir() : a.cache;
@@ -103,8 +104,7 @@ void run_coverage_bound(const CoverageBoundArgs& a) {
                      {"greedy", plan_json(greedy, positions)},
                      {"local_search", plan_json(best, positions)}});
   }
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double seconds = seconds_since(t0);
   std::printf("%zu positions %.2f m apart, %.1f s\n", positions.size(), a.spacing, seconds);
   if (!a.out.empty()) {
     const nlohmann::json j = {{"scene", a.scene},

@@ -9,6 +9,7 @@
 #include "semioctree/discretize.h"
 #include "semioctree/figures.h"
 #include "semioctree/outputs.h"
+#include "semioctree/timing.h"
 
 namespace semioctree::cli {
 
@@ -40,13 +41,12 @@ void add_discretize_command(CLI::App& app) {
   cmd->callback([o] {
     SemiOcTree::coarse_level_for(o->disc.leaf, o->disc.coarse);  // fail before reading anything
     const PreparedCloud cloud = prepare(o->source, "discretize", &o->limits);
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = Clock::now();
     DiscretizeReport rep;
     const auto tree = discretize(*cloud.pre.cloud, cloud.pre.ceiling_height, o->disc, &rep);
     tree->prune();
     tree->compact();
-    const DiscretizationRun run = describe_run(
-        *tree, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    const DiscretizationRun run = describe_run(*tree, seconds_since(t0));
     std::printf(
         "discretize: %zu coarse voxels, %llu octants (%zu occupied leaves) at %g → %g m [%.2f s]\n",
         tree->coarse_count(), static_cast<unsigned long long>(run.stats.total()),

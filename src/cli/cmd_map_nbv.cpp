@@ -15,6 +15,7 @@
 #include "cloud_input.h"
 #include "commands.h"
 #include "option_checks.h"
+#include "planning_options.h"
 #include "progress_line.h"
 #include "semioctree/figures.h"
 #include "semioctree/nbv.h"
@@ -24,7 +25,8 @@
 #include "semioctree/openings.h"
 #include "semioctree/outputs.h"
 #include "semioctree/scan_io.h"
-#include "survey_session.h"
+#include "semioctree/timing.h"
+#include "survey_output.h"
 
 namespace semioctree::cli {
 
@@ -46,10 +48,6 @@ struct MapNbvOptions {
   unsigned threads = 0;
   ScannerView limits;
 };
-
-double since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 nlohmann::json point_json(const Point3& p) {
   return {{"x", p.x}, {"y", p.y}, {"z", p.z}};
@@ -91,7 +89,7 @@ std::vector<std::shared_ptr<const ReturnDirections>> returns_from_map(
   std::printf(
       "directions with returns, from the rays the map carved: %zu of %zu scanner(s) (rays that "
       "reach an occupied leaf: %s) [%.2f s]\n",
-      used, scanners.size(), shares.c_str(), since(t0));
+      used, scanners.size(), shares.c_str(), seconds_since(t0));
   return out;
 }
 
@@ -118,7 +116,7 @@ std::optional<std::vector<DetectedOpening>> find_openings_in_map(
       "doors and windows (ceiling %.2f m%s): %zu walls, %zu candidates, %zu confirmed, %zu "
       "rejected as occlusion shadows [%.2f s]\n",
       *ceiling, o.ceiling > 0 ? "" : ", found in the map", rep.walls.size(), rep.candidates,
-      found.size(), rep.rejected.size(), since(t0));
+      found.size(), rep.rejected.size(), seconds_since(t0));
   for (const DetectedOpening& d : found)
     std::printf("  %-6s %.2f x %.2f m, sill %.2f m, line of sight %.0f %%\n", to_string(d.kind),
                 d.width, d.height, d.sill, 100 * d.los_fraction);
@@ -176,7 +174,7 @@ void run_map_nbv(const MapNbvOptions& o) {
         "read %s: OctoMap %s, resolution %.3f m, %zu leaf nodes → SemiOcTree of %zu coarse "
         "voxels (%zu occupied leaves) [%.2f s]\n",
         o.map.c_str(), file.binary ? "occupancy map (.bt)" : file.type.c_str(), res, rep.map_leaves,
-        rep.coarse_voxels, rep.occupied_leaves, since(t0));
+        rep.coarse_voxels, rep.occupied_leaves, seconds_since(t0));
     returns = returns_from_map(*occupancy, scanners, o);
     if (unobserved == Label::kUnknown) {
       // Space the map does not hold: seen from a scanner (then empty: nothing returned
@@ -190,7 +188,7 @@ void run_map_nbv(const MapNbvOptions& o) {
       std::printf(
           "classified the unobserved space from %zu scanner position(s): %zu empty, %zu "
           "occluded, %zu out [%.2f s]\n",
-          views.size(), occ.empty, occ.occluded, occ.out, since(t1));
+          views.size(), occ.empty, occ.occluded, occ.out, seconds_since(t1));
     }
     openings = find_openings_in_map(*tree, o, scanners, returns);
   } else {
@@ -220,7 +218,7 @@ void run_map_nbv(const MapNbvOptions& o) {
       next_best_view(*tree, geometry, Point3(robot.x, robot.y, 0.0), scanners, params);
   progress.finish();
   std::printf("nbv: %zu feasible candidates, %zu occluded targets [%.2f s]\n", r.candidates.size(),
-              r.scoring.targets, since(t2));
+              r.scoring.targets, seconds_since(t2));
 
   std::filesystem::create_directories(o.out);
   if (openings)
@@ -257,7 +255,7 @@ void run_map_nbv(const MapNbvOptions& o) {
       {"complete", complete},
       {"octants", octants},
       {"volume_percent", volume},
-      {"seconds_total", since(t_start)}};
+      {"seconds_total", seconds_since(t_start)}};
   const std::string json_path = (std::filesystem::path(o.out) / "nbv.json").string();
   write_file_atomically(json_path, [&](std::ostream& os) { os << j.dump(2) << "\n"; });
   if (r.best)

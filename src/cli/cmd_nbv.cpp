@@ -4,7 +4,6 @@
 // the first scan is at the origin and the others are registered to it by ICP. Writes what a survey
 // writes (survey.json, scan_NN/).
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -13,8 +12,11 @@
 #include "cloud_input.h"
 #include "commands.h"
 #include "option_checks.h"
+#include "planning_options.h"
 #include "semioctree/scan_io.h"
-#include "survey_session.h"
+#include "semioctree/survey.h"
+#include "semioctree/timing.h"
+#include "survey_output.h"
 
 namespace semioctree::cli {
 
@@ -43,14 +45,13 @@ void warn_if_tilted(const Scan& s) {
 }
 
 void run_nbv(const NbvOptions& o) {
-  const auto t_start = std::chrono::steady_clock::now();
+  const auto t_start = Clock::now();
   if (!o.poses.empty() && o.poses.size() != o.clouds.size())
     throw std::invalid_argument("give one --pose per --cloud file (" +
                                 std::to_string(o.clouds.size()) + " files, " +
                                 std::to_string(o.poses.size()) + " poses)");
   check_scanner_limits(o.limits);
-  SessionParams p;
-  p.out = o.out;
+  SurveyParams p;
   p.map.limits = o.limits;
   apply_planning_options(o.plan, p);
   p.robot.radius = o.robot_radius;
@@ -64,12 +65,12 @@ void run_nbv(const NbvOptions& o) {
       scans.push_back(std::move(s));
     }
   }
-  std::unique_ptr<SurveySession> session;
-  ScanOutcome last;
+  std::unique_ptr<SurveyOutput> output;
+  std::unique_ptr<Survey> survey;
   for (std::size_t i = 0; i < scans.size(); ++i) {
     const Scan& s = scans[i];
     std::printf("scan %zu: %s\n", i, s.source.c_str());
-    if (!session) {
+    if (!survey) {
       // The robot's scanner height: the first scan's optical centre above its floor.
       if (o.scanner_height > 0) {
         p.robot.scanner_height = o.scanner_height;
@@ -79,7 +80,8 @@ void run_nbv(const NbvOptions& o) {
         p.robot.scanner_height = pre.transform.translation().z();
         std::printf("  scanner height above the floor: %.2f m\n", p.robot.scanner_height);
       }
-      session = std::make_unique<SurveySession>(p);
+      output = std::make_unique<SurveyOutput>(o.out, p);
+      survey = std::make_unique<Survey>(p, output.get());
     }
     // Placed by --pose, by the file (PTX header, PCD/PLY viewpoint), or, for
     // the first scan, at the origin; any other scan is registered by ICP.
@@ -93,31 +95,32 @@ void run_nbv(const NbvOptions& o) {
     in.yaw_deg = posed ? s.pose.yaw_deg() : 0.0;
     in.registered = !posed;
     try {
-      last = session->add_scan(in);
+      output->scan_done(survey->add_scan(in), survey->map());
     } catch (const RegistrationError& e) {
       // As the survey does: the map of the scans before is written, with the reason.
-      nlohmann::json extra = {{"inputs", o.clouds}, {"error", e.what()}};
-      session->write_survey_json("registration_failed", extra);
-      throw;
+      const std::string error = std::string(e.what()) + " in " + o.out;
+      nlohmann::json extra = {{"inputs", o.clouds}, {"error", error}};
+      output->write_survey_json("registration_failed", extra, &survey->map());
+      throw RegistrationError(error);
     }
   }
+  const ScanRecord& last = survey->records().back();
   std::string why = "stop_percentage";
-  if (!last.nbv)
+  if (!last.nbv.best)
     why = "no_candidate";
-  else if (last.stop_percent >= o.plan.stop)
+  else if (last.nbv.stop_percent >= o.plan.stop)
     why = "max_scans";  // the scans given are all there is; more are needed
   nlohmann::json extra;
   extra["inputs"] = o.clouds;
-  extra["seconds_total"] =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-  session->write_survey_json(why, extra);
-  if (last.nbv)
+  extra["seconds_total"] = seconds_since(t_start);
+  output->write_survey_json(why, extra, &survey->map());
+  if (last.nbv.best)
     std::printf(
         "next best view: (%.3f, %.3f, %.3f), score %.1f; stop percentage %.3f %% (%s %.3f "
         "%%)\n",
-        last.nbv->position.x, last.nbv->position.y, last.nbv->position.z, last.nbv->score,
-        last.stop_percent, last.stop_percent < o.plan.stop ? "below the threshold" : "threshold",
-        o.plan.stop);
+        last.nbv.best->position.x, last.nbv.best->position.y, last.nbv.best->position.z,
+        last.nbv.best->score, last.nbv.stop_percent,
+        last.nbv.stop_percent < o.plan.stop ? "below the threshold" : "threshold", o.plan.stop);
   else
     std::printf("no feasible next best view\n");
   std::printf("wrote %s/survey.json and scan_NN/\n", o.out.c_str());

@@ -18,6 +18,7 @@
 #include "semioctree/sim/scanner.h"
 #include "semioctree/sim/scene.h"
 #include "semioctree/sim/solids.h"
+#include "semioctree/timing.h"
 
 namespace semioctree::cli {
 
@@ -80,7 +81,7 @@ void run_scan(const ScanArgs& a) {
                              std::to_string(pose.y) + ") would be inside " + inside + " of " +
                              a.scene);
 
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = Clock::now();
   const sim::SceneTriangles triangles = sim::tessellate(scene);
   const std::unique_ptr<sim::RayCaster> caster = sim::make_ray_caster(triangles);
   const sim::ScanGrid grid = sim::scan_grid(scene.scanner);
@@ -104,8 +105,7 @@ void run_scan(const ScanArgs& a) {
   const sim::Scan scan = sim::scan(*caster, scene.scanner, pose, options);
   progress.finish();
   sim::write_scan(a.out, scan);
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double seconds = seconds_since(t0);
   std::cout << "wrote " << a.out << ": " << scan.points.size() << " points of " << scan.rays_cast
             << " rays (scanner frame; pose x=" << pose.x << " y=" << pose.y
             << " z=" << scan.sensor_height << " yaw_deg=" << pose.yaw_deg

@@ -47,15 +47,17 @@ class CountProgress {
   CountProgress(std::FILE* stream, std::string prefix, std::string noun)
       : line_(stream), prefix_(std::move(prefix)), noun_(std::move(noun)) {}
 
+  // Thread-safe.
+  void update(std::size_t done, std::size_t total) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_ < std::chrono::seconds(2)) return;
+    last_ = now;
+    line_.update(prefix_ + " " + std::to_string(done) + " of " + std::to_string(total) + " " +
+                 noun_);
+  }
   std::function<void(std::size_t, std::size_t)> callback() {
-    return [this](std::size_t done, std::size_t total) {
-      const std::lock_guard<std::mutex> lock(mutex_);
-      const auto now = std::chrono::steady_clock::now();
-      if (now - last_ < std::chrono::seconds(2)) return;
-      last_ = now;
-      line_.update(prefix_ + " " + std::to_string(done) + " of " + std::to_string(total) + " " +
-                   noun_);
-    };
+    return [this](std::size_t done, std::size_t total) { update(done, total); };
   }
   void finish() { line_.finish(); }
 

@@ -10,12 +10,13 @@
 #include "semioctree/sim/raycaster.h"
 #include "semioctree/sim/scanner.h"
 #include "semioctree/sim/scene.h"
+#include "semioctree/timing.h"
 
 namespace semioctree::cli {
 
 PreparedCloud scan_scene_at_start(const std::string& scene_path, std::uint64_t seed,
                                   const PreprocessParams& params) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = Clock::now();
   const sim::Scene scene = sim::load_scene(scene_path);
   const auto caster = sim::make_ray_caster(sim::tessellate(scene));
   const sim::Pose2 start{scene.robot.start.x(), scene.robot.start.y(), scene.robot.start_yaw_deg};
@@ -25,7 +26,7 @@ PreparedCloud scan_scene_at_start(const std::string& scene_path, std::uint64_t s
   const sim::Scan s = sim::scan(*caster, scene.scanner, start, so);
   std::printf("scanned %s from (%.2f, %.2f): %llu rays, %zu points [%.2f s]\n", scene_path.c_str(),
               start.x, start.y, static_cast<unsigned long long>(s.rays_cast), s.points.size(),
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+              seconds_since(t0));
   // Into the pipeline's types: points in the scanner frame, pose scanner → world.
   Cloud cloud;
   cloud.reserve(s.points.size());
@@ -36,7 +37,7 @@ PreparedCloud scan_scene_at_start(const std::string& scene_path, std::uint64_t s
   }
   PreparedCloud out;
   out.raw_points = s.points.size();
-  const auto t1 = std::chrono::steady_clock::now();
+  const auto t1 = Clock::now();
   out.pre = preprocess(cloud, params);
   const Eigen::Vector3d o = out.pre.transform * s.origin();
   out.scanners.emplace_back(o.x(), o.y(), o.z());
@@ -48,8 +49,7 @@ PreparedCloud scan_scene_at_start(const std::string& scene_path, std::uint64_t s
   out.returns.push_back(return_directions(seen, out.pre.transform.linear()));
   std::printf("preprocess: floor σ %.1f mm, ceiling at %.3f m, %zu → %zu points [%.2f s]\n",
               1000 * out.pre.floor.sigma, out.pre.ceiling_height, out.pre.input_points,
-              out.pre.output_points,
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count());
+              out.pre.output_points, seconds_since(t1));
   return out;
 }
 

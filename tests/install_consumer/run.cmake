@@ -3,7 +3,7 @@
 # same with the octomap_ext component only while the pipeline's dependencies
 # cannot be found; an unknown component must fail; build examples/ on its own
 # against the same prefix.
-# Variables: BUILD_DIR, SOURCE_DIR, WORK_DIR.
+# Variables: BUILD_DIR, SOURCE_DIR, WORK_DIR, WITH_SIM (the survey example is built and run).
 
 # Runs a command; on failure stops with `what`, the exit code and the command's output.
 function(run_step what)
@@ -46,7 +46,20 @@ file(WRITE ${WORK_DIR}/bogus/CMakeLists.txt
 execute_process(COMMAND ${CMAKE_COMMAND} -S ${WORK_DIR}/bogus -B ${WORK_DIR}/bogus/build
                         -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(rc EQUAL 0 OR NOT err MATCHES "no component 'bogus' \\(it has octomap_ext and pipeline\\)")
+if(rc EQUAL 0 OR NOT err MATCHES "no component 'bogus' \\(it has octomap_ext, pipeline, sim and sim_platform\\)")
   message(FATAL_ERROR "an unknown component was not refused clearly (${rc}):\n${out}\n${err}")
 endif()
 build_against_prefix("examples/ on its own" ${SOURCE_DIR}/examples ${WORK_DIR}/examples)
+# The survey example, built against the installed package, surveys the small box room
+# with the library alone (two scans at most, to keep the test short).
+if(WITH_SIM)
+  if(NOT EXISTS ${WORK_DIR}/examples/survey_scene)
+    message(FATAL_ERROR "examples/survey_scene was not built against the installed package")
+  endif()
+  run_step("examples/survey_scene" ${WORK_DIR}/examples/survey_scene
+           ${SOURCE_DIR}/sim/scenes/box-room.scene.json 2)
+  message(STATUS "${step_output}")
+  if(NOT step_output MATCHES "scan 0 at .*stopped because")
+    message(FATAL_ERROR "examples/survey_scene did not report its scans:\n${step_output}")
+  endif()
+endif()

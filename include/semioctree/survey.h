@@ -1,0 +1,177 @@
+// The survey stage (paper 2.3): scan → preprocess → register → update the map → next
+// best view → move, repeated until the stop percentage (Eq 5) falls below its threshold,
+// no feasible candidate remains, or the scan budget is spent. The stage neither prints
+// nor writes files: progress and per-scan records reach a SurveyObserver; the scans come
+// from a ScanPlatform (a simulated robot, a person with a scanner); where to scan next is
+// a NextScanPolicy's choice. docs/survey.md tells the loop's rules.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "semioctree/nbv.h"
+#include "semioctree/preprocess.h"
+#include "semioctree/registration.h"
+#include "semioctree/update.h"
+
+namespace semioctree {
+
+struct SurveyParams {
+  SurveyMapParams map;
+  PreprocessParams preprocess;
+  RegistrationParams registration;
+  NbvParams nbv;  // its room, grid anchor and progress are set by the survey
+  RobotGeometry robot;
+  double stop_percent = 0.1;   // Eq 5 threshold, %
+  bool room_only = true;       // targets and Eq 5 inside room_box (false: the whole map)
+  std::size_t max_scans = 10;  // Survey::run's scan budget (at least 1)
+};
+
+// One scan as the platform delivers it: points in the scanner frame and the planar pose
+// the platform reports (odometry, or the pose a user gave), survey frame.
+struct IncomingScan {
+  Cloud::Ptr points;
+  double x = 0, y = 0, yaw_deg = 0;
+  bool registered = true;  // refine by ICP against the scans before (never the first)
+  // How far the reported pose can be wrong: a larger ICP correction is a false match
+  // (0: no bound).
+  double max_correction_m = 0, max_correction_deg = 0;
+  std::size_t points_raw = 0;  // before invalid points were dropped (0: points->size())
+};
+
+// What the survey did with one scan; filled stage by stage (SurveyObserver::stage_done).
+struct ScanRecord {
+  std::size_t index = 0;
+  Eigen::Isometry3d scanner_to_survey = Eigen::Isometry3d::Identity();  // estimated
+  std::size_t points_raw = 0, points_kept = 0, points_outside_limits = 0;
+  double ceiling_height = 0, tilt_alpha_deg = 0, tilt_beta_deg = 0;  // preprocessing
+  struct Registration {
+    RegistrationResult icp;
+    double scanner_shift_m = 0;  // how far the correction moved the scanner
+  };
+  std::optional<Registration> registration;  // none for the first or a posed scan
+  ScanUpdateReport update;
+  bool room_only = false;       // the room was asked for
+  std::optional<RoomBox> room;  // where targets and Eq 5 were counted (none: whole map)
+  NbvResult nbv;                // candidates, their scores, the best one, Eq 5
+  struct Seconds {
+    double preprocess = 0, registration = 0, occupancy = 0, openings = 0, occlusion = 0, nbv = 0,
+           total = 0;
+  } seconds;
+
+  Point3 scanner() const;  // the optical centre, survey frame
+  // Eq 5 from the NBV; none without a feasible candidate.
+  std::optional<double> stop_percent() const;
+};
+
+enum class SurveyStage { kPreprocessed, kRegistered, kMapped, kRoomFound, kPlanned };
+
+// Why Survey::run ended. kRegistrationFailed leaves the map of the scans before intact.
+enum class StopReason { kStopPercentage, kMaxScans, kNoCandidate, kRegistrationFailed };
+const char* to_string(StopReason reason);  // "stop_percentage", "max_scans", ...
+
+// Where to scan next, and what the policy predicted the scan adds (if it knows).
+struct NextScanChoice {
+  Point3 position;  // survey frame, a feasible candidate
+  std::optional<double> predicted_gain_percent;
+};
+
+// Chooses the next scan position among the feasible, scored candidates.
+class NextScanPolicy {
+ public:
+  virtual ~NextScanPolicy() = default;
+  // `scan.nbv.candidates` is not empty when this is called.
+  virtual NextScanChoice choose(const ScanRecord& scan, const SurveyMap& map) = 0;
+  virtual const char* what() const = 0;  // a noun for messages: "NBV", ...
+};
+
+// The paper's policy: the best-scoring candidate (the NBV).
+class BestScorePolicy : public NextScanPolicy {
+ public:
+  NextScanChoice choose(const ScanRecord& scan, const SurveyMap& map) override;
+  const char* what() const override { return "NBV"; }
+};
+
+// The baseline: a feasible candidate drawn uniformly (mt19937_64 seeded with `seed`).
+class RandomCandidatePolicy : public NextScanPolicy {
+ public:
+  explicit RandomCandidatePolicy(std::uint64_t seed) : rng_(seed) {}
+  NextScanChoice choose(const ScanRecord& scan, const SurveyMap& map) override;
+  const char* what() const override { return "random candidate"; }
+
+ private:
+  std::mt19937_64 rng_;
+};
+
+// Where the scans come from and how the scanner moves.
+class ScanPlatform {
+ public:
+  virtual ~ScanPlatform() = default;
+  // A scan at the current position.
+  virtual IncomingScan scan() = 0;
+  // The survey placed the last scan at this pose (survey frame).
+  virtual void placed(const Eigen::Isometry3d& scanner_to_survey) { (void)scanner_to_survey; }
+  // Moves the scanner to `target` (survey frame; its z is ignored).
+  virtual void move_to(const Point3& target) = 0;
+};
+
+// Progress and records. Every call comes from the thread running the survey, except
+// candidates_scored (from scoring threads: make it thread-safe).
+class SurveyObserver {
+ public:
+  virtual ~SurveyObserver() = default;
+  virtual void scan_taken(std::size_t index, const IncomingScan& scan) { (void)index, (void)scan; }
+  virtual void stage_done(SurveyStage stage, const ScanRecord& scan) { (void)stage, (void)scan; }
+  virtual void candidates_scored(std::size_t done, std::size_t total) { (void)done, (void)total; }
+  // Survey::run: the scan is mapped and placed on the platform.
+  virtual void scan_done(const ScanRecord& scan, const SurveyMap& map) { (void)scan, (void)map; }
+  // Survey::run: the platform moved to `choice`, chosen by `policy`.
+  virtual void moved(const ScanRecord& scan, const NextScanChoice& choice,
+                     const NextScanPolicy& policy) {
+    (void)scan, (void)choice, (void)policy;
+  }
+};
+
+struct SurveyOutcome {
+  StopReason stopped_because = StopReason::kMaxScans;
+  std::string error;  // kRegistrationFailed: why
+};
+
+class Survey {
+ public:
+  // Throws std::invalid_argument for max_scans < 1.
+  explicit Survey(const SurveyParams& params, SurveyObserver* observer = nullptr);
+
+  // One scan through preprocess → register → update → NBV, reporting each stage.
+  // `robot_position`: where the robot stands (default: under the scanner). Throws
+  // RegistrationError (the map is left as it was) when ICP fails or finds another floor,
+  // PreprocessError when the scan cannot be levelled.
+  const ScanRecord& add_scan(const IncomingScan& scan,
+                             const std::optional<Point3>& robot_position = std::nullopt);
+
+  // The loop: scans from `platform` until the stop percentage, no candidate or the
+  // budget ends it; moves to `policy`'s choice in between. A failed registration ends
+  // the survey (kRegistrationFailed with the error), it does not throw.
+  SurveyOutcome run(ScanPlatform& platform, NextScanPolicy& policy);
+
+  const SurveyMap& map() const { return map_; }
+  const std::vector<ScanRecord>& records() const { return records_; }
+  const SurveyParams& params() const { return params_; }
+
+ private:
+  SurveyParams params_;
+  SurveyObserver* observer_;
+  SurveyObserver silent_;
+  SurveyMap map_;
+  std::vector<ScanRecord> records_;
+};
+
+// Heading of a pose (its x axis in the horizontal plane), degrees.
+double yaw_deg_of(const Eigen::Isometry3d& pose);
+
+}  // namespace semioctree

@@ -1,0 +1,94 @@
+// The synthetic scanner on the simulated robot as a survey platform (the survey stage's
+// ScanPlatform), and the oracle policy that knows the scene. This library joins the two
+// sides that otherwise know nothing of each other: the pipeline (semioctree::semioctree)
+// and the simulator (semioctree::sim).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "semioctree/sim/coverage.h"
+#include "semioctree/sim/raycaster.h"
+#include "semioctree/sim/robot.h"
+#include "semioctree/sim/scanner.h"
+#include "semioctree/sim/scene.h"
+#include "semioctree/survey.h"
+
+namespace semioctree::sim_platform {
+
+// The truth about one scan, known to the simulation only.
+struct ScanTruth {
+  sim::Pose2 true_pose, reported_pose;  // world frame; reported: odometry
+  Eigen::Isometry3d scanner_to_world;   // true
+  std::size_t points = 0;
+  double scan_seconds = 0;
+  std::optional<double> guess_error_m;          // the odometry guess's planar error (not scan 0)
+  double pose_error_m = 0, pose_error_deg = 0;  // of the survey's estimate (after placed)
+};
+
+class SimulatedPlatform : public ScanPlatform {
+ public:
+  // Scans `scene` with its scanner from its robot's start. `seed`: scanner noise
+  // (seed·1000 + scan index) and odometry drift; `keep_points`: keep every scan's points
+  // (world frame, as registered) for measuring coverage.
+  SimulatedPlatform(const sim::Scene& scene, std::uint64_t seed, unsigned threads,
+                    bool keep_points);
+
+  // The scan at the robot's true pose; its reported pose is the survey's estimate of the
+  // scan before moved by the odometry of the leg since (odometry drifts: only its
+  // increments are trusted), with correction bounds from the robot's odometry noise.
+  IncomingScan scan() override;
+  void placed(const Eigen::Isometry3d& scanner_to_survey) override;
+  void move_to(const Point3& target) override;  // survey frame, through the first scan
+
+  const std::vector<ScanTruth>& truths() const { return truths_; }
+  const sim::Robot& robot() const { return robot_; }
+  const sim::Scene& scene() const { return scene_; }
+  const sim::RayCaster& caster() const { return *caster_; }
+  unsigned threads() const { return threads_; }
+  // Survey frame → world: the first scan's estimate against its true pose.
+  const Eigen::Isometry3d& survey_to_world() const { return survey_to_world_; }
+  // keep_points: every placed scan's points, world frame through its estimated pose.
+  const std::vector<Eigen::Vector3f>& measured_points() const { return measured_; }
+  const std::vector<Eigen::Vector3d>& optical_centres() const { return optical_centres_; }
+
+ private:
+  const sim::Scene& scene_;
+  std::uint64_t seed_;
+  unsigned threads_;
+  bool keep_points_;
+  std::unique_ptr<sim::RayCaster> caster_;
+  sim::Robot robot_;
+  std::vector<ScanTruth> truths_;
+  std::optional<sim::Scan> last_;  // taken, not placed yet
+  Eigen::Isometry3d survey_to_world_ = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d previous_estimate_ = Eigen::Isometry3d::Identity();
+  sim::Pose2 previous_reported_;
+  double previous_distance_ = 0;
+  std::vector<Eigen::Vector3f> measured_;
+  std::vector<Eigen::Vector3d> optical_centres_;
+};
+
+// The yardstick: scans every feasible candidate in the simulator and takes the one whose
+// points cover the most reference samples not covered yet (greedy, perfect knowledge,
+// among the planner's own candidates). Needs a platform that keeps its points.
+class OraclePolicy : public NextScanPolicy {
+ public:
+  // `progress(scanned, candidates)` now and then, from the survey's thread.
+  OraclePolicy(const SimulatedPlatform& platform, const sim::CoverageReference& reference,
+               std::uint64_t seed, std::function<void(std::size_t, std::size_t)> progress = {});
+  NextScanChoice choose(const ScanRecord& scan, const SurveyMap& map) override;
+  const char* what() const override { return "oracle's choice"; }
+
+ private:
+  const SimulatedPlatform& platform_;
+  const sim::CoverageReference& reference_;
+  std::uint64_t seed_;
+  std::function<void(std::size_t, std::size_t)> progress_;
+};
+
+}  // namespace semioctree::sim_platform

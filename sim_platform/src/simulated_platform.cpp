@@ -1,0 +1,133 @@
+#include "semioctree/sim_platform/simulated_platform.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "semioctree/sim/geometry.h"
+#include "semioctree/timing.h"
+
+namespace semioctree::sim_platform {
+
+namespace {
+
+sim::Scan scan_at(const SimulatedPlatform& p, const sim::Pose2& pose, std::uint64_t seed) {
+  sim::ScanOptions so;
+  so.seed = seed;
+  so.threads = p.threads();
+  so.with_intensity = false;
+  return sim::scan(p.caster(), p.scene().scanner, pose, so);
+}
+
+}  // namespace
+
+SimulatedPlatform::SimulatedPlatform(const sim::Scene& scene, std::uint64_t seed, unsigned threads,
+                                     bool keep_points)
+    : scene_(scene),
+      seed_(seed),
+      threads_(threads),
+      keep_points_(keep_points),
+      caster_(sim::make_ray_caster(sim::tessellate(scene))),
+      robot_(scene.robot, seed) {}
+
+IncomingScan SimulatedPlatform::scan() {
+  if (last_) throw std::logic_error("SimulatedPlatform: the last scan was not placed");
+  const std::size_t i = truths_.size();
+  const auto t0 = Clock::now();
+  last_ = scan_at(*this, robot_.true_pose(), seed_ * 1000 + std::uint64_t(i));
+  ScanTruth truth;
+  truth.scan_seconds = seconds_since(t0);
+  truth.true_pose = robot_.true_pose();
+  truth.reported_pose = robot_.reported_pose();
+  truth.scanner_to_world = last_->sensor_to_world();
+  truth.points = last_->points.size();
+
+  IncomingScan in;
+  in.points.reset(new Cloud);
+  in.points->reserve(last_->points.size());
+  for (const Eigen::Vector3f& q : last_->points) in.points->push_back({q.x(), q.y(), q.z()});
+  in.points_raw = last_->points.size();
+  const sim::Pose2& reported = truth.reported_pose;
+  if (i == 0) {
+    in.x = reported.x;
+    in.y = reported.y;
+    in.yaw_deg = reported.yaw_deg;
+  } else {
+    const Eigen::Isometry3d leg =
+        planar_pose(previous_reported_.x, previous_reported_.y, previous_reported_.yaw_deg)
+            .inverse() *
+        planar_pose(reported.x, reported.y, reported.yaw_deg);
+    const Eigen::Isometry3d guess = previous_estimate_ * leg;
+    in.x = guess.translation().x();
+    in.y = guess.translation().y();
+    in.yaw_deg = yaw_deg_of(guess);
+    const double d = robot_.distance_driven() - previous_distance_;
+    in.max_correction_m = 0.1 + 5 * scene_.robot.odometry_sigma_xy * d;
+    in.max_correction_deg = 1.0 + 5 * scene_.robot.odometry_sigma_yaw_deg * d;
+    const Eigen::Vector3d g(in.x, in.y, 0), t = survey_to_world_.inverse() * last_->origin();
+    truth.guess_error_m = (g - t).head<2>().norm();
+  }
+  truths_.push_back(truth);
+  return in;
+}
+
+void SimulatedPlatform::placed(const Eigen::Isometry3d& scanner_to_survey) {
+  if (!last_) throw std::logic_error("SimulatedPlatform: no scan to place");
+  ScanTruth& truth = truths_.back();
+  previous_reported_ = truth.reported_pose;
+  previous_distance_ = robot_.distance_driven();
+  const Eigen::Vector3d t = scanner_to_survey.translation();
+  previous_estimate_ = planar_pose(t.x(), t.y(), yaw_deg_of(scanner_to_survey));
+
+  // The survey frame is the first scan's estimate of the world; map back through it.
+  const Eigen::Isometry3d& true_pose = truth.scanner_to_world;
+  if (truths_.size() == 1) survey_to_world_ = true_pose * scanner_to_survey.inverse();
+  const Eigen::Isometry3d estimated_world = survey_to_world_ * scanner_to_survey;
+  truth.pose_error_m = (estimated_world.translation() - true_pose.translation()).norm();
+  truth.pose_error_deg =
+      std::abs(std::remainder(yaw_deg_of(estimated_world) - yaw_deg_of(true_pose), 360.0));
+  if (keep_points_) {
+    const Eigen::Affine3f to_world = estimated_world.cast<float>();
+    for (const Eigen::Vector3f& q : last_->points) measured_.push_back(to_world * q);
+    optical_centres_.push_back(true_pose.translation());
+  }
+  last_.reset();
+}
+
+void SimulatedPlatform::move_to(const Point3& target) {
+  const Eigen::Vector3d w = survey_to_world_ * Eigen::Vector3d(target.x, target.y, 0.0);
+  robot_.move_to({w.x(), w.y(), robot_.true_pose().yaw_deg});
+}
+
+OraclePolicy::OraclePolicy(const SimulatedPlatform& platform,
+                           const sim::CoverageReference& reference, std::uint64_t seed,
+                           std::function<void(std::size_t, std::size_t)> progress)
+    : platform_(platform), reference_(reference), seed_(seed), progress_(std::move(progress)) {}
+
+NextScanChoice OraclePolicy::choose(const ScanRecord& scan, const SurveyMap&) {
+  const std::vector<NbvCandidate>& candidates = scan.nbv.candidates;
+  if (candidates.empty()) throw std::logic_error("OraclePolicy: no candidate to choose from");
+  const std::vector<bool> have = sim::covered_samples(reference_, platform_.measured_points());
+  const double yaw_deg = platform_.robot().true_pose().yaw_deg;
+  NextScanChoice best;
+  std::size_t best_gain = 0;
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    const Point3& p = candidates[c].position;
+    const Eigen::Vector3d w = platform_.survey_to_world() * Eigen::Vector3d(p.x, p.y, 0.0);
+    const sim::Scan s = scan_at(platform_, {w.x(), w.y(), yaw_deg}, seed_);
+    const Eigen::Affine3f to_world = s.sensor_to_world().cast<float>();
+    std::vector<Eigen::Vector3f> points;
+    points.reserve(s.points.size());
+    for (const Eigen::Vector3f& q : s.points) points.push_back(to_world * q);
+    const std::vector<bool> got = sim::covered_samples(reference_, points);
+    std::size_t gain = 0;
+    for (std::size_t k = 0; k < got.size(); ++k) gain += got[k] && !have[k];
+    if (c == 0 || gain > best_gain) best_gain = gain, best.position = p;
+    if (progress_ && ((c + 1) % 20 == 0 || c + 1 == candidates.size()))
+      progress_(c + 1, candidates.size());
+  }
+  best.predicted_gain_percent =
+      have.empty() ? 0.0 : 100.0 * double(best_gain) / double(have.size());
+  return best;
+}
+
+}  // namespace semioctree::sim_platform

@@ -1,0 +1,77 @@
+#include "planning_options.h"
+
+#include <stdexcept>
+#include <string>
+
+#include "option_checks.h"
+
+namespace semioctree::cli {
+
+void add_planning_options(CLI::App& cmd, PlanningOptions& o) {
+  cmd.add_option("--leaf", o.leaf, "leaf (finest octant) size r, m")
+      ->check(finite_positive())
+      ->capture_default_str();
+  cmd.add_option("--coarse", o.coarse, "coarse voxel size L = r*2^k, m")
+      ->check(finite_positive())
+      ->capture_default_str();
+  cmd.add_option("--stop", o.stop, "stop percentage threshold (Eq 5), %")
+      ->check(finite_in(0, 100))
+      ->capture_default_str();
+  cmd.add_option(
+         "--method", o.method,
+         "NBV scoring: 1 = occluded volume, all levels (paper), 2 = one level (--level), 3 = "
+         "area of the occlusion frontier facing the position (surface, ours)")
+      ->check(CLI::IsMember({1, 2, 3}))
+      ->capture_default_str();
+  cmd.add_option("--level", o.level,
+                 "method 2: the octree level scored, 0 = coarse voxels ... k = leaf (default: the "
+                 "leaf)")
+      ->check(whole_in(0, 16));
+  cmd.add_option(
+         "--candidate-spacing", o.candidate_spacing,
+         "spacing of the NBV candidate grid at scanner height (a grid through the first scan "
+         "position), m")
+      ->check(finite_positive(10))
+      ->capture_default_str();
+  cmd.add_option("--target-points", o.target_points,
+                 "decimate each scan to about this many points (paper: 400 000; 0: keep all; "
+                 "else at least 1000)")
+      ->check(zero_or_whole_in(1000, 1000000000))
+      ->capture_default_str();
+  cmd.add_flag("--whole-map", o.whole_map,
+               "count occluded space as NBV targets and in the stop percentage over the whole "
+               "map, as Eq 5 reads when the grid is the room; default: only inside the room the "
+               "scans stand in (its walls, floor and ceiling), so that space behind the walls or "
+               "seen out of a window does not count");
+  cmd.add_option("--threads", o.threads, "worker threads (0: one per core; at most 256)")
+      ->check(thread_count())
+      ->capture_default_str();
+}
+
+void apply_planning_options(const PlanningOptions& o, SurveyParams& p, bool homogeneous) {
+  // L = r·2^k, or a clear error (the homogeneous grid's region snaps to L too);
+  // the homogeneous grid has one level.
+  const unsigned semioctree_k = SemiOcTree::coarse_level_for(o.leaf, o.coarse);
+  const unsigned k = homogeneous ? 0 : semioctree_k;
+  if (o.level > int(k))
+    throw std::invalid_argument("--level " + std::to_string(o.level) +
+                                " is finer than the leaf: the grid has levels 0 (coarse voxels) "
+                                "to " +
+                                std::to_string(k) + " (leaf)");
+  if (o.level >= 0 && o.method != 2)
+    throw std::invalid_argument("--level applies to --method 2 only");
+  // The homogeneous grid spans the same coarse-aligned region as the semioctree.
+  p.map.grid = homogeneous ? DiscretizeParams{o.leaf, o.leaf, o.coarse}
+                           : DiscretizeParams{o.leaf, o.coarse, 0.0};
+  p.map.threads = o.threads;
+  p.preprocess.target_points = o.target_points;
+  p.nbv.method = o.method;
+  if (o.level >= 0) p.nbv.level = unsigned(o.level);
+  p.nbv.candidate_spacing = o.candidate_spacing;
+  p.nbv.threads = o.threads;
+  p.nbv.limits = p.map.limits;
+  p.stop_percent = o.stop;
+  p.room_only = !o.whole_map;
+}
+
+}  // namespace semioctree::cli

@@ -1,0 +1,236 @@
+#include "survey_output.h"
+
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+
+#include "semioctree/figures.h"
+#include "semioctree/octomap_ext/file_io.h"
+#include "semioctree/outputs.h"
+#include "semioctree/timing.h"
+
+namespace semioctree::cli {
+
+using nlohmann::json;
+
+json octants_json(const SemiOcTree& tree, json& volume_percent_out) {
+  const OctantStatistics st = tree.statistics();
+  json by_level = json::array(), by_label = json::object();
+  for (unsigned l = 0; l <= tree.coarse_level(); ++l) by_level.push_back(st.at_level(l));
+  for (int l = 1; l < kLabelCount; ++l)
+    by_label[std::string(label_name(Label(l)))] = st.with_label(Label(l));
+  json pct = json::object();
+  for (Label l : {Label::kEmpty, Label::kOccupied, Label::kOccluded, Label::kDoor, Label::kWindow,
+                  Label::kOut})
+    pct[std::string(label_name(l))] = volume_percent(st, l);
+  volume_percent_out = pct;
+  return {{"total", st.total()}, {"by_level", by_level}, {"by_label", by_label}};
+}
+
+json pose_json(const Eigen::Isometry3d& p) {
+  const Eigen::Vector3d t = p.translation();
+  return {{"x", t.x()}, {"y", t.y()}, {"z", t.z()}, {"yaw_deg", yaw_deg_of(p)}};
+}
+
+void print_floor_layer_note(const RobotGeometry& robot, double leaf) {
+  if (floor_layer_clearance(robot, leaf) > robot.ground_clearance)
+    std::printf(
+        "note: leaves of %.3f m are coarser than the robot's ground clearance (%.3f m): the "
+        "safety cylinder drives over whatever lies in the floor's leaf layer\n",
+        leaf, robot.ground_clearance);
+}
+
+void clear_previous_survey(const std::string& dir) {
+  // A survey.json and scan_NN/ folders left by an earlier run would sit beside
+  // the new ones (a 3-scan run over a 5-scan one keeps scan_03, scan_04) and
+  // read as part of it. Only what a survey writes is removed.
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return;
+  std::size_t removed = 0;
+  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    const bool scan_dir = name.size() == 7 && name.compare(0, 5, "scan_") == 0 &&
+                          std::isdigit(static_cast<unsigned char>(name[5])) &&
+                          std::isdigit(static_cast<unsigned char>(name[6])) && e.is_directory(ec);
+    if (scan_dir || name == "survey.json" || name == "coverage_missed.ply") {
+      fs::remove_all(e.path(), ec);
+      if (ec)
+        throw std::runtime_error(e.path().string() +
+                                 ": cannot remove the previous run's output: " + ec.message());
+      ++removed;
+    }
+  }
+  if (removed)
+    std::printf("replacing the previous survey in %s (%zu files and scan folders removed)\n",
+                dir.c_str(), removed);
+}
+
+SurveyOutput::SurveyOutput(std::string dir, const SurveyParams& params)
+    : dir_(std::move(dir)), params_(params) {
+  clear_previous_survey(dir_);
+  print_floor_layer_note(params_.robot, params_.map.grid.leaf);
+}
+
+void SurveyOutput::stage_done(SurveyStage stage, const ScanRecord& s) {
+  switch (stage) {
+    case SurveyStage::kPreprocessed:
+      std::printf(
+          "  preprocess: %zu → %zu points (%zu outside the scanner's limits dropped), ceiling "
+          "%.2f m, tilt α %.2f° β %.2f° [%.2f s]\n",
+          s.points_raw, s.points_kept, s.points_outside_limits, s.ceiling_height, s.tilt_alpha_deg,
+          s.tilt_beta_deg, s.seconds.preprocess);
+      break;
+    case SurveyStage::kRegistered: {
+      const RegistrationResult& r = s.registration->icp;
+      std::printf(
+          "  register: ICP moved the scanner %.3f m, %.2f°; fitness %.2e m², overlap %.0f %% "
+          "[%.2f s]\n",
+          s.registration->scanner_shift_m, r.rotation_deg, r.fitness, 100 * r.overlap,
+          s.seconds.registration);
+      break;
+    }
+    case SurveyStage::kMapped: {
+      const ScanUpdateReport& up = s.update;
+      std::printf(
+          "  map: %zu new coarse voxels, %zu occupied leaves [%.2f s]; %zu openings [%.2f s]; "
+          "occlusion %zu octants tested, %zu split, %zu segments [%.2f s]\n",
+          up.new_coarse_voxels, up.occupied_leaves, up.seconds_occupancy, up.openings_found,
+          up.seconds_openings, up.retest.octants_tested + up.new_space.octants_tested,
+          up.retest.octants_split + up.new_space.octants_split,
+          up.retest.segments + up.new_space.segments, up.seconds_occlusion);
+      progress_ = std::make_unique<CountProgress>(stdout, "  nbv: scored", "candidates");
+      break;
+    }
+    case SurveyStage::kRoomFound:
+      if (s.room)
+        std::printf(
+            "  room: x %.2f..%.2f, y %.2f..%.2f, z %.2f..%.2f m (targets and Eq 5 inside)\n",
+            s.room->min.x, s.room->max.x, s.room->min.y, s.room->max.y, s.room->min.z,
+            s.room->max.z);
+      else
+        std::printf(
+            "  room: no scanner stands in free space: targets and Eq 5 over the whole map\n");
+      break;
+    case SurveyStage::kPlanned: {
+      if (progress_) progress_->finish();
+      const NbvResult& nbv = s.nbv;
+      if (nbv.best)
+        std::printf(
+            "  nbv: %zu feasible candidates, %zu occluded targets; best (%.3f, %.3f) score "
+            "%.1f, stop %.3f %% [%.2f s]\n",
+            nbv.candidate_report.feasible, nbv.scoring.targets, nbv.best->position.x,
+            nbv.best->position.y, nbv.best->score, nbv.stop_percent, s.seconds.nbv);
+      else
+        std::printf(
+            "  nbv: no feasible candidate (%zu grid points, %zu blocked, %zu unreachable) "
+            "[%.2f s]\n",
+            nbv.candidate_report.grid_points, nbv.candidate_report.cylinder_blocked,
+            nbv.candidate_report.unreachable, s.seconds.nbv);
+      break;
+    }
+  }
+  std::fflush(stdout);
+}
+
+void SurveyOutput::candidates_scored(std::size_t done, std::size_t total) {
+  if (progress_) progress_->update(done, total);
+}
+
+void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
+  const auto t0 = Clock::now();
+  char name[16];
+  std::snprintf(name, sizeof name, "scan_%02zu", s.index);
+  const std::string dir = (std::filesystem::path(dir_) / name).string();
+  const std::optional<NbvCandidate>& best = s.nbv.best;
+  SliceOptions slice;
+  slice.height = params_.robot.scanner_height;
+  slice.scans = map.scanners();
+  if (best) slice.nbv = best->position;
+  slice.title = std::string(name) + (best ? ": scans and next best view" : ": scans");
+  write_map_files(map.tree(), dir, slice);
+  write_cloud_ply(map.merged_cloud(), (std::filesystem::path(dir) / "cloud.ply").string());
+  const double write_seconds = seconds_since(t0);
+  std::printf("  wrote %s/ [%.2f s]\n", dir.c_str(), write_seconds);
+  std::fflush(stdout);
+
+  json r;
+  r["index"] = s.index;
+  r["pose"] = pose_json(s.scanner_to_survey);
+  r["points_raw"] = s.points_raw;
+  r["points_kept"] = s.points_kept;
+  r["points_outside_limits"] = s.points_outside_limits;
+  json volume;
+  r["octants"] = octants_json(map.tree(), volume);
+  r["volume_percent"] = volume;
+  // Eq 5 is measured from the NBV: without one there is nothing to report.
+  r["stop_percent"] = best ? json(s.nbv.stop_percent) : json(nullptr);
+  r["nbv"] = best ? json{{"x", best->position.x},
+                         {"y", best->position.y},
+                         {"z", best->position.z},
+                         {"score", best->score}}
+                  : json(nullptr);
+  r["candidates"] = s.nbv.candidate_report.feasible;
+  r["occluded_targets"] = s.nbv.scoring.targets;
+  if (s.room)  // where targets and Eq 5 were counted (null: the whole map)
+    r["room"] = {{"min", {s.room->min.x, s.room->min.y, s.room->min.z}},
+                 {"max", {s.room->max.x, s.room->max.y, s.room->max.z}}};
+  else
+    r["room"] = nullptr;
+  if (s.registration) {
+    const RegistrationResult& icp = s.registration->icp;
+    r["registration"] = {{"fitness", icp.fitness},
+                         {"overlap", icp.overlap},
+                         {"converged", icp.converged},
+                         {"correction_m", s.registration->scanner_shift_m},
+                         {"correction_deg", icp.rotation_deg},
+                         {"iterations", icp.iterations}};
+  } else {
+    r["registration"] = nullptr;
+  }
+  r["seconds"] = {{"preprocess", s.seconds.preprocess},
+                  {"register", s.seconds.registration},
+                  {"occupancy", s.seconds.occupancy},
+                  {"openings", s.seconds.openings},
+                  {"occlusion", s.seconds.occlusion},
+                  {"nbv", s.seconds.nbv},
+                  {"write", write_seconds},
+                  {"total", s.seconds.total + write_seconds}};
+  if (records_.size() <= s.index) records_.resize(s.index + 1);
+  records_[s.index] = r;
+}
+
+void SurveyOutput::write_survey_json(const std::string& stopped_because, const json& extra,
+                                     const SurveyMap* map) const {
+  json openings = json::array();
+  if (map)
+    for (const DetectedOpening& op : map->openings()) {
+      json corners = json::array();
+      for (const auto& c : op.corners) corners.push_back({c.x(), c.y(), c.z()});
+      openings.push_back({{"kind", to_string(op.kind)},
+                          {"corners", corners},
+                          {"width", op.width},
+                          {"height", op.height}});
+    }
+  json j = {{"format", "semioctree-survey"},
+            {"version", 1},
+            {"leaf", params_.map.grid.leaf},
+            {"coarse", params_.map.grid.coarse},
+            {"stop_threshold_percent", params_.stop_percent},
+            {"method", params_.nbv.method},
+            {"stopped_because", stopped_because},
+            // Only the stop percentage says the room is done; the other reasons leave
+            // occluded space that the NBV (if any) would still reveal.
+            {"complete", stopped_because == "stop_percentage"},
+            {"scans", records_},
+            {"openings", openings}};
+  for (const auto& [k, v] : extra.items()) j[k] = v;
+  std::filesystem::create_directories(dir_);
+  write_file_atomically((std::filesystem::path(dir_) / "survey.json").string(),
+                        [&](std::ostream& os) { os << j.dump(2) << "\n"; });
+}
+
+}  // namespace semioctree::cli

@@ -1,0 +1,57 @@
+// What `survey` and `nbv` print and write while the survey stage runs: a progress line
+// per stage, scan_NN/ (the map files, slice.png, cloud.ply) per scan, and survey.json
+// (docs/outputs.md). An observer of the stage: the stage itself neither prints nor writes.
+#pragma once
+
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "progress_line.h"
+#include "semioctree/survey.h"
+
+namespace semioctree::cli {
+
+class SurveyOutput : public SurveyObserver {
+ public:
+  // Removes what an earlier survey left in `dir` (survey.json, scan_NN/,
+  // coverage_missed.ply; nothing else) and says when the leaf is coarser than the
+  // robot's ground clearance.
+  SurveyOutput(std::string dir, const SurveyParams& params);
+
+  void stage_done(SurveyStage stage, const ScanRecord& scan) override;
+  void candidates_scored(std::size_t done, std::size_t total) override;
+  // Writes scan_NN/ and keeps the scan's survey.json record.
+  void scan_done(const ScanRecord& scan, const SurveyMap& map) override;
+
+  // The record of scan `index` (after scan_done), for keys a command adds.
+  nlohmann::json& record(std::size_t index) { return records_.at(index); }
+  // survey.json with `stopped_because` and any extra top-level keys.
+  void write_survey_json(const std::string& stopped_because, const nlohmann::json& extra,
+                         const SurveyMap* map) const;
+  const std::string& dir() const { return dir_; }
+
+ private:
+  std::string dir_;
+  SurveyParams params_;
+  std::unique_ptr<CountProgress> progress_;  // one per NBV, while candidates are scored
+  std::vector<nlohmann::json> records_;
+};
+
+// survey.json's "octants" of a map (total, by_level, by_label), and its
+// "volume_percent" (Table 1's labels) into `volume_percent_out`.
+nlohmann::json octants_json(const SemiOcTree& tree, nlohmann::json& volume_percent_out);
+
+// x, y, z and heading of a scanner pose.
+nlohmann::json pose_json(const Eigen::Isometry3d& scanner_to_survey);
+
+// Says so when the leaf is coarser than the robot's ground clearance (obstacles in the
+// floor's leaf layer are then driven over, see floor_layer_clearance).
+void print_floor_layer_note(const RobotGeometry& robot, double leaf);
+
+// Removes survey.json, coverage_missed.ply and the scan_NN/ folders an earlier run left
+// in `dir` (nothing else).
+void clear_previous_survey(const std::string& dir);
+
+}  // namespace semioctree::cli

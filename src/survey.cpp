@@ -1,0 +1,201 @@
+#include "semioctree/survey.h"
+
+#include <pcl/common/transforms.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "semioctree/timing.h"
+
+namespace semioctree {
+
+const char* to_string(StopReason reason) {
+  switch (reason) {
+    case StopReason::kStopPercentage:
+      return "stop_percentage";
+    case StopReason::kMaxScans:
+      return "max_scans";
+    case StopReason::kNoCandidate:
+      return "no_candidate";
+    case StopReason::kRegistrationFailed:
+      return "registration_failed";
+  }
+  return "?";
+}
+
+double yaw_deg_of(const Eigen::Isometry3d& pose) {
+  const Eigen::Vector3d x = pose.rotation() * Eigen::Vector3d::UnitX();
+  return std::atan2(x.y(), x.x()) * 180.0 / M_PI;
+}
+
+Point3 ScanRecord::scanner() const {
+  const Eigen::Vector3d o = scanner_to_survey.translation();
+  return Point3(o.x(), o.y(), o.z());
+}
+
+std::optional<double> ScanRecord::stop_percent() const {
+  if (!nbv.best) return std::nullopt;
+  return nbv.stop_percent;
+}
+
+NextScanChoice BestScorePolicy::choose(const ScanRecord& scan, const SurveyMap&) {
+  if (!scan.nbv.best) throw std::logic_error("BestScorePolicy: no candidate to choose from");
+  return {scan.nbv.best->position, std::nullopt};
+}
+
+NextScanChoice RandomCandidatePolicy::choose(const ScanRecord& scan, const SurveyMap&) {
+  const std::vector<NbvCandidate>& c = scan.nbv.candidates;
+  if (c.empty()) throw std::logic_error("RandomCandidatePolicy: no candidate to choose from");
+  std::uniform_int_distribution<std::size_t> pick(0, c.size() - 1);
+  return {c[pick(rng_)].position, std::nullopt};
+}
+
+Survey::Survey(const SurveyParams& params, SurveyObserver* observer)
+    : params_(params), observer_(observer ? observer : &silent_), map_(params.map) {
+  if (params_.max_scans < 1) throw std::invalid_argument("Survey: max_scans must be at least 1");
+}
+
+namespace {
+
+// ICP's correction as a movement of the scanner (the correction's own translation is
+// about the survey origin, far away), checked against what the platform can be wrong by.
+double checked_scanner_shift(const RegistrationResult& r, const Eigen::Isometry3d& place,
+                             const IncomingScan& in) {
+  const Eigen::Vector3d c = place.translation();
+  const double shift = (r.correction * c - c).head<2>().norm();
+  if ((in.max_correction_m > 0 && shift > in.max_correction_m) ||
+      (in.max_correction_deg > 0 && r.rotation_deg > in.max_correction_deg)) {
+    char m[256];
+    std::snprintf(m, sizeof m,
+                  "ICP moved the scanner %.2f m and turned it %.2f°, more than its "
+                  "odometry can be wrong (%.2f m, %.2f°): a false match",
+                  shift, r.rotation_deg, in.max_correction_m, in.max_correction_deg);
+    throw RegistrationError(m);
+  }
+  return shift;
+}
+
+}  // namespace
+
+const ScanRecord& Survey::add_scan(const IncomingScan& in,
+                                   const std::optional<Point3>& robot_position) {
+  const auto t_total = Clock::now();
+  ScanRecord rec;
+  rec.index = records_.size();
+  rec.points_raw = in.points_raw ? in.points_raw : in.points->size();
+
+  // Stage 1: drop the returns outside the scanner's limits (its mount, the robot), level
+  // this scan in its own frame, then place it by the reported pose.
+  auto t0 = Clock::now();
+  const Cloud::Ptr seen = within_limits(*in.points, params_.map.limits, &rec.points_outside_limits);
+  const PreprocessResult pre = preprocess(*seen, params_.preprocess);
+  rec.points_kept = pre.output_points;
+  rec.ceiling_height = pre.ceiling_height;
+  rec.tilt_alpha_deg = pre.alpha_deg;
+  rec.tilt_beta_deg = pre.beta_deg;
+  rec.seconds.preprocess = seconds_since(t0);
+  observer_->stage_done(SurveyStage::kPreprocessed, rec);
+  const Eigen::Isometry3d place = planar_pose(in.x, in.y, in.yaw_deg);
+  Cloud::Ptr guess(new Cloud);
+  pcl::transformPointCloud(*pre.cloud, *guess, place.matrix().cast<float>());
+
+  // Stage 2: ICP against the merged cloud of the previous scans.
+  t0 = Clock::now();
+  Eigen::Isometry3d correction = Eigen::Isometry3d::Identity();
+  if (rec.index > 0 && in.registered) {
+    ScanRecord::Registration reg;
+    try {
+      reg.icp = register_scan(*guess, map_.merged_cloud(), params_.registration);
+      reg.scanner_shift_m = checked_scanner_shift(reg.icp, place, in);
+    } catch (const RegistrationError& e) {
+      throw RegistrationError("scan " + std::to_string(rec.index) + " could not be registered (" +
+                              e.what() + "); the map of the previous scans is kept");
+    }
+    correction = reg.icp.correction;
+    rec.registration = reg;
+  }
+  rec.seconds.registration = seconds_since(t0);
+  rec.scanner_to_survey = correction * place * pre.transform;
+  Cloud::Ptr registered(new Cloud);
+  pcl::transformPointCloud(*guess, *registered, correction.matrix().cast<float>());
+  const Point3 scanner = rec.scanner();
+  // One floor for the whole survey: a scan levelled onto another plane (the ground
+  // outside a window, a table) would shift the map up or down.
+  if (!map_.empty() && std::abs(scanner.z - map_.scanners().front().z) > 0.1) {
+    char m[200];
+    std::snprintf(m, sizeof m,
+                  "scan %zu: its floor was found %.2f m from the first scan's (scanner at %.2f m "
+                  "above it instead of %.2f m); the map of the previous scans is kept",
+                  rec.index, scanner.z - map_.scanners().front().z, scanner.z,
+                  map_.scanners().front().z);
+    throw RegistrationError(m);
+  }
+  if (rec.registration) observer_->stage_done(SurveyStage::kRegistered, rec);
+
+  // Stages 3-5 (8 for later scans): occupancy, openings, occlusion.
+  rec.update = map_.add_scan(*registered, scanner, pre.ceiling_height,
+                             return_directions(*seen, rec.scanner_to_survey.linear()));
+  rec.seconds.occupancy = rec.update.seconds_occupancy;
+  rec.seconds.openings = rec.update.seconds_openings;
+  rec.seconds.occlusion = rec.update.seconds_occlusion;
+  observer_->stage_done(SurveyStage::kMapped, rec);
+
+  // Stages 6-7: next best view and stop percentage, in the room the scans stand in.
+  t0 = Clock::now();
+  NbvParams nbv = params_.nbv;
+  nbv.grid_anchor = map_.scanners().front();  // see NbvParams::grid_anchor
+  rec.room_only = params_.room_only;
+  if (params_.room_only) {
+    nbv.room = room_box(map_.tree(), map_.scanners(), params_.robot.scanner_height, 0.0,
+                        map_.ceiling_height());
+    rec.room = nbv.room;
+    observer_->stage_done(SurveyStage::kRoomFound, rec);
+  }
+  SurveyObserver* observer = observer_;
+  nbv.progress = [observer](std::size_t done, std::size_t total) {
+    observer->candidates_scored(done, total);
+  };
+  rec.nbv = next_best_view(map_.tree(), params_.robot, robot_position.value_or(scanner),
+                           map_.scanners(), nbv);
+  rec.seconds.nbv = seconds_since(t0);
+  rec.seconds.total = seconds_since(t_total);
+  observer_->stage_done(SurveyStage::kPlanned, rec);
+  records_.push_back(std::move(rec));
+  return records_.back();
+}
+
+SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
+  SurveyOutcome out;
+  for (std::size_t i = records_.size(); i < params_.max_scans; ++i) {
+    const IncomingScan in = platform.scan();
+    observer_->scan_taken(i, in);
+    try {
+      add_scan(in);
+    } catch (const RegistrationError& e) {
+      out.stopped_because = StopReason::kRegistrationFailed;
+      out.error = e.what();
+      return out;
+    }
+    const ScanRecord& rec = records_.back();
+    platform.placed(rec.scanner_to_survey);
+    observer_->scan_done(rec, map_);
+    if (!rec.nbv.best) {
+      out.stopped_because = StopReason::kNoCandidate;
+      return out;
+    }
+    if (rec.nbv.stop_percent < params_.stop_percent) {
+      out.stopped_because = StopReason::kStopPercentage;
+      return out;
+    }
+    if (i + 1 == params_.max_scans) break;
+    const NextScanChoice next = policy.choose(rec, map_);
+    platform.move_to(next.position);
+    observer_->moved(rec, next, policy);
+  }
+  out.stopped_because = StopReason::kMaxScans;
+  return out;
+}
+
+}  // namespace semioctree

@@ -1,0 +1,201 @@
+// The survey stage (include/semioctree/survey.h) driven from the library, with the
+// simulated platform: the order of what it reports, its stop rules, the policy's choice
+// reaching the platform, and a failed registration ending the survey with the map kept.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "semioctree/sim/scene.h"
+#include "semioctree/sim_platform/simulated_platform.h"
+#include "semioctree/survey.h"
+
+namespace semioctree {
+namespace {
+
+using sim_platform::SimulatedPlatform;
+
+// The one-door-window scene with a coarser scanner (fewer rays: a fast test).
+sim::Scene test_scene() {
+  sim::Scene s = sim::load_scene(std::string(SEMIOCTREE_SOURCE_DIR) +
+                                 "/sim/scenes/one-door-window.scene.json");
+  s.scanner.azimuth_step_deg = s.scanner.elevation_step_deg = 0.4;
+  return s;
+}
+
+SurveyParams params_for(const sim::Scene& scene, std::size_t max_scans, double stop) {
+  SurveyParams p;
+  p.map.limits.min_range = scene.scanner.min_range;
+  p.map.limits.max_range = scene.scanner.max_range;
+  p.map.limits.elevation_min_deg = scene.scanner.elevation_min_deg;
+  p.map.limits.elevation_max_deg = scene.scanner.elevation_max_deg;
+  p.nbv.limits = p.map.limits;
+  p.robot.radius = scene.robot.radius;
+  p.robot.scanner_height = scene.scanner.height;
+  p.preprocess.target_points = 200000;
+  p.max_scans = max_scans;
+  p.stop_percent = stop;
+  return p;
+}
+
+// Every report as a line: "taken 0", "stage 0 1", "done 0", "moved 0".
+struct EventLog : SurveyObserver {
+  std::vector<std::string> events;
+  std::size_t scored_calls = 0;
+  void scan_taken(std::size_t i, const IncomingScan&) override {
+    events.push_back("taken " + std::to_string(i));
+  }
+  void stage_done(SurveyStage stage, const ScanRecord& s) override {
+    events.push_back("stage " + std::to_string(s.index) + " " + std::to_string(int(stage)));
+  }
+  void candidates_scored(std::size_t, std::size_t) override { ++scored_calls; }
+  void scan_done(const ScanRecord& s, const SurveyMap&) override {
+    events.push_back("done " + std::to_string(s.index));
+  }
+  void moved(const ScanRecord& s, const NextScanChoice&, const NextScanPolicy&) override {
+    events.push_back("moved " + std::to_string(s.index));
+  }
+};
+
+// Takes the lowest-scoring candidate and remembers what it chose.
+struct WorstScorePolicy : NextScanPolicy {
+  std::vector<Point3> chosen;
+  NextScanChoice choose(const ScanRecord& scan, const SurveyMap&) override {
+    const NbvCandidate* worst = &scan.nbv.candidates.front();
+    for (const NbvCandidate& c : scan.nbv.candidates)
+      if (c.score < worst->score) worst = &c;
+    chosen.push_back(worst->position);
+    return {worst->position, std::nullopt};
+  }
+  const char* what() const override { return "worst candidate"; }
+};
+
+TEST(SurveyStage, ReportsEveryStageInOrderAndEndsByItsRule) {
+  const sim::Scene scene = test_scene();
+  SimulatedPlatform platform(scene, 1, 0, false);
+  EventLog log;
+  Survey survey(params_for(scene, 3, 0.1), &log);
+  BestScorePolicy nbv;
+  const SurveyOutcome outcome = survey.run(platform, nbv);
+  const std::size_t n = survey.records().size();
+  ASSERT_GE(n, 1u);
+  ASSERT_LE(n, 3u);
+  std::vector<std::string> expected;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::string s = std::to_string(i);
+    expected.push_back("taken " + s);
+    expected.push_back("stage " + s + " " + std::to_string(int(SurveyStage::kPreprocessed)));
+    if (i > 0)
+      expected.push_back("stage " + s + " " + std::to_string(int(SurveyStage::kRegistered)));
+    expected.push_back("stage " + s + " " + std::to_string(int(SurveyStage::kMapped)));
+    expected.push_back("stage " + s + " " + std::to_string(int(SurveyStage::kRoomFound)));
+    expected.push_back("stage " + s + " " + std::to_string(int(SurveyStage::kPlanned)));
+    expected.push_back("done " + s);
+    if (i + 1 < n) expected.push_back("moved " + s);
+  }
+  EXPECT_EQ(log.events, expected);
+  EXPECT_GT(log.scored_calls, 0u);
+  const ScanRecord& last = survey.records().back();
+  switch (outcome.stopped_because) {
+    case StopReason::kStopPercentage:
+      ASSERT_TRUE(last.stop_percent());
+      EXPECT_LT(*last.stop_percent(), 0.1);
+      break;
+    case StopReason::kMaxScans:
+      EXPECT_EQ(n, 3u);
+      break;
+    case StopReason::kNoCandidate:
+      EXPECT_FALSE(last.nbv.best);
+      break;
+    case StopReason::kRegistrationFailed:
+      FAIL() << outcome.error;
+  }
+  // Every scan before the last went on: its stop percentage was above the threshold.
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    ASSERT_TRUE(survey.records()[i].stop_percent());
+    EXPECT_GE(*survey.records()[i].stop_percent(), 0.1);
+  }
+  // The stage keeps one scanner per record, placed where the record says.
+  ASSERT_EQ(survey.map().scanners().size(), n);
+  for (std::size_t i = 0; i < n; ++i) {
+    EXPECT_NEAR(survey.map().scanners()[i].x, survey.records()[i].scanner().x, 1e-6);
+    EXPECT_NEAR(survey.map().scanners()[i].y, survey.records()[i].scanner().y, 1e-6);
+  }
+}
+
+TEST(SurveyStage, SpendsTheBudgetAndDrivesToThePolicysChoice) {
+  const sim::Scene scene = test_scene();
+  SimulatedPlatform platform(scene, 2, 0, false);
+  Survey survey(params_for(scene, 2, 0.0), nullptr);  // threshold 0: never complete
+  WorstScorePolicy worst;
+  const SurveyOutcome outcome = survey.run(platform, worst);
+  EXPECT_EQ(outcome.stopped_because, StopReason::kMaxScans);
+  ASSERT_EQ(survey.records().size(), 2u);
+  ASSERT_EQ(worst.chosen.size(), 1u);
+  // The second scan stands where the policy sent the robot (in the world: through the
+  // first scan's estimate), and the survey placed it there up to its registration.
+  const Eigen::Vector3d target =
+      platform.survey_to_world() * Eigen::Vector3d(worst.chosen[0].x, worst.chosen[0].y, 0);
+  EXPECT_NEAR(platform.robot().true_pose().x, target.x(), 1e-9);
+  EXPECT_NEAR(platform.robot().true_pose().y, target.y(), 1e-9);
+  const Point3 second = survey.records()[1].scanner();
+  EXPECT_NEAR(second.x, worst.chosen[0].x, 0.05);
+  EXPECT_NEAR(second.y, worst.chosen[0].y, 0.05);
+  EXPECT_LT(platform.truths()[1].pose_error_m, 0.05);
+}
+
+// The simulated platform, but its second scan reports a pose 0.5 m off and claims its
+// odometry is good to 1 mm: ICP's correction is then a "false match".
+class LyingPlatform : public SimulatedPlatform {
+ public:
+  using SimulatedPlatform::SimulatedPlatform;
+  IncomingScan scan() override {
+    IncomingScan in = SimulatedPlatform::scan();
+    if (truths().size() == 2) {
+      in.x += 0.5;
+      in.max_correction_m = 0.001;
+    }
+    return in;
+  }
+};
+
+TEST(SurveyStage, AFailedRegistrationEndsTheSurveyAndKeepsTheMapOfTheScansBefore) {
+  const sim::Scene scene = test_scene();
+  LyingPlatform platform(scene, 1, 0, false);
+  Survey survey(params_for(scene, 4, 0.0), nullptr);
+  BestScorePolicy nbv;
+  const SurveyOutcome outcome = survey.run(platform, nbv);
+  EXPECT_EQ(outcome.stopped_because, StopReason::kRegistrationFailed);
+  EXPECT_NE(outcome.error.find("scan 1 could not be registered"), std::string::npos)
+      << outcome.error;
+  EXPECT_EQ(survey.records().size(), 1u);
+  EXPECT_EQ(survey.map().scanners().size(), 1u);
+  EXPECT_STREQ(to_string(outcome.stopped_because), "registration_failed");
+}
+
+TEST(SurveyStage, RandomPolicyDrawsAmongTheCandidatesReproducibly) {
+  ScanRecord r;
+  for (int i = 0; i < 7; ++i) r.nbv.candidates.push_back({Point3(i, 2 * i, 1.5), double(i)});
+  const SurveyMap map{SurveyMapParams{}};
+  RandomCandidatePolicy a(5), b(5), c(6);
+  bool differs = false;
+  for (int k = 0; k < 20; ++k) {
+    const Point3 pa = a.choose(r, map).position, pb = b.choose(r, map).position;
+    const Point3 pc = c.choose(r, map).position;
+    EXPECT_EQ(pa.x, pb.x);
+    EXPECT_EQ(pa.y, 2 * pa.x);  // one of the candidates
+    differs = differs || pa.x != pc.x;
+  }
+  EXPECT_TRUE(differs);
+  EXPECT_THROW(BestScorePolicy().choose(ScanRecord{}, map), std::logic_error);
+}
+
+TEST(SurveyStage, AScanBudgetBelowOneIsRefused) {
+  SurveyParams p;
+  p.max_scans = 0;
+  EXPECT_THROW(Survey{p}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace semioctree
