@@ -11,6 +11,8 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "atomic_file.h"
+
 namespace semioctree::sim {
 
 namespace fs = std::filesystem;
@@ -57,27 +59,18 @@ pcl::PCLPointCloud2 to_cloud(const Scan& scan) {
   return cloud;
 }
 
-// Write to "<path>.tmp" with `write`, then rename over `path`.
+// Writes with a PCL writer `write(temporary path)` (its console quiet), then renames
+// over `path`.
 template <class Write>
 void write_atomically(const std::string& path, Write write) {
-  const std::string tmp = path + ".tmp";
-  int status;
-  {
+  const bool ok = detail::replace_file_atomically(path, [&](const std::string& tmp) {
     const auto saved = pcl::console::getVerbosityLevel();
     pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
-    status = write(tmp);
+    const int status = write(tmp);
     pcl::console::setVerbosityLevel(saved);
-  }
-  std::error_code ec;
-  if (status < 0 || !fs::exists(tmp, ec)) {
-    fs::remove(tmp, ec);
-    throw std::runtime_error(path + ": cannot write (is the directory there and writable?)");
-  }
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw std::runtime_error(path + ": cannot write: " + ec.message());
-  }
+    return status >= 0;
+  });
+  if (!ok) throw std::runtime_error(path + ": cannot write (is the directory there and writable?)");
 }
 
 // The pose (scanner frame → world) as the file's viewpoint (PCD VIEWPOINT, PLY

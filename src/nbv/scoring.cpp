@@ -7,6 +7,7 @@
 
 #include "../parallel_for.h"
 #include "scanner_limits.h"
+#include "semioctree/timing.h"
 #include "targets.h"
 #include "visibility.h"
 
@@ -26,10 +27,6 @@ using nbv_detail::resolve_level;
 using nbv_detail::ScannerLimits;
 using nbv_detail::Target;
 using nbv_detail::targets_for;
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // Eq 3 of each position over `targets` (docs/nbv.md, "Score" and "Cost").
 std::vector<double> score_targets(const SemiOcTree& tree, const std::vector<Target>& targets,
@@ -137,11 +134,11 @@ NbvResult next_best_view(const SemiOcTree& tree, const RobotGeometry& robot,
                          const Point3& robot_position, const std::vector<Point3>& past_scans,
                          const NbvParams& params) {
   NbvResult res;
-  auto t0 = std::chrono::steady_clock::now();
+  auto t0 = Clock::now();
   const std::vector<Point3> positions =
       find_candidates(tree, robot, robot_position, past_scans, params, &res.candidate_report);
   res.seconds_candidates = seconds_since(t0);
-  t0 = std::chrono::steady_clock::now();
+  t0 = Clock::now();
   const std::vector<Target> targets = targets_for(tree, params);
   const std::vector<double> scores = score_targets(tree, targets, positions, params, &res.scoring);
   res.candidates.reserve(positions.size());
@@ -150,7 +147,7 @@ NbvResult next_best_view(const SemiOcTree& tree, const RobotGeometry& robot,
     if (!res.best || scores[i] > res.best->score) res.best = res.candidates.back();
   }
   res.seconds_scoring = seconds_since(t0);
-  t0 = std::chrono::steady_clock::now();
+  t0 = Clock::now();
   if (res.best)
     res.stop_percent =
         stop_percentage(tree, res.best->position, params.limits, params.threads, params.room);

@@ -1,16 +1,14 @@
 // The cache of coverage references: key, file layout, reading and writing.
 #include "coverage/reference_cache.h"
 
-#include <unistd.h>
-
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
-#include <random>
 #include <sstream>
 #include <system_error>
 #include <utility>
 
+#include "atomic_file.h"
 #include "coverage/content_hash.h"
 #include "semioctree/sim/coverage/visibility.h"
 
@@ -133,26 +131,12 @@ bool read_file(const fs::path& path, std::string& out) {
 bool write_atomically(const fs::path& path, const std::string& data) {
   std::error_code ec;
   fs::create_directories(path.parent_path(), ec);
-  std::random_device rd;
-  const fs::path tmp =
-      path.string() + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(rd());
-  {
+  return detail::replace_file_atomically(path.string(), [&](const std::string& tmp) {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) return false;
     out.write(data.data(), static_cast<std::streamsize>(data.size()));
     out.flush();
-    if (!out) {
-      out.close();
-      fs::remove(tmp, ec);
-      return false;
-    }
-  }
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    return false;
-  }
-  return true;
+    return bool(out);
+  });
 }
 
 }  // namespace
