@@ -1,12 +1,8 @@
-// Stage 5 (paper 2.2.3): the occlusion study. Every non-occupied octant is
-// classified from the scanner positions so far by ray casting through the
-// SemiOcTree (octant-sized steps): the segment from a scanner to it crosses an
-// occupied octant → occluded; it passes through a door or window and nothing
-// occupied → out; otherwise → empty. An octant whose sample points (its centre
-// and corners) disagree is partly visible and is split, down to the leaf, so
-// the boundary between seen and unseen space is at leaf resolution while
-// wholly visible or wholly hidden space stays coarse. A point is seen if any
-// scanner sees it; the scanner's range and elevation limits apply.
+// Stage 5 (paper 2.2.3): the occlusion study. Labels every non-occupied octant
+// empty (seen directly from a scanner position), out (seen only through a door
+// or window) or occluded (hidden from every position), by casting segments
+// through the SemiOcTree; partly visible octants are split down to the leaf.
+// The rules (sample points, scopes, doorway scans, return directions): docs/occlusion.md.
 #pragma once
 
 #include <octomap/OcTree.h>

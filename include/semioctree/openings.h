@@ -1,15 +1,8 @@
-// Stage 4 (paper 2.2.2): doors and windows. Vertical planes are found by RANSAC
-// (largest first, inliers removed before the next); each plane is cut into wall
-// segments where a long stretch of it holds no point at any height, and each
-// wall segment tall and long enough is rasterised into a 2-D occupancy grid in
-// wall coordinates (along the wall × height above the floor). Rectangular holes
-// in that grid are candidates: a door reaches the floor, a window has a sill
-// and ends below the ceiling, each within its size limits. A hole in the points
-// is either an opening or the shadow of something standing in front of the
-// wall, so a candidate is confirmed only when enough of its cells can be seen
-// directly from a scanner position through the SemiOcTree (no occupied octant
-// on the way). Confirmed holes label the leaf octants of the wall plane door or
-// window (label_openings), which the occlusion study then treats as exits.
+// Stage 4 (paper 2.2.2): doors and windows. Walls are found as vertical RANSAC
+// planes and rasterised; rectangular holes of door or window size are
+// candidates, confirmed only when enough of their cells are seen directly from
+// a scanner position (else they are shadows), then labelled door / window.
+// The rules and their reasons: docs/occlusion.md.
 #pragma once
 
 #include <Eigen/Core>
