@@ -1,4 +1,4 @@
-// Scene files: every rule of shared/scene-format.md and its message, defaults, mesh and
+// Scene files: every rule of docs/scene-format.md and its message, defaults, mesh and
 // .bt scenes, and the `semioctree scene-info` command.
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>

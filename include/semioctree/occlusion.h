@@ -94,7 +94,7 @@ enum class OcclusionScope : std::uint8_t {
   // positions), keeping what their label already says: occluded means hidden
   // from the earlier positions, out means seen through an opening. The direct
   // view from a new position wins, so out can become empty and occluded
-  // anything (DESIGN.md stage 8).
+  // anything (docs/data-flow.md, later scans).
   kNewViews,
   // Only empty octants: those seen through a door or window, and not directly,
   // become out; the rest stay empty. For a map whose free space was known

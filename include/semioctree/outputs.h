@@ -24,7 +24,7 @@ struct MapFiles {
 };
 
 // Creates `dir` if needed. Throws FileError. The two .ot files carry the
-// markers of DESIGN.md: a cube of 3×3×3 leaves (the scanner's head) labelled
+// markers of docs/outputs.md: a cube of 3×3×3 leaves (the scanner's head) labelled
 // `scan` at every position of slice.scans and `nbv` at slice.nbv, so that
 // octovis shows where the scans stood and where to go next. `tree` itself is
 // not changed (the markers go into a copy); occupancy.bt shows them as free.

@@ -3,7 +3,7 @@
 // no feasible candidate remains, or the scan budget is spent. The stage neither prints
 // nor writes files: progress and per-scan records reach a SurveyObserver; the scans come
 // from a ScanPlatform (a simulated robot, a person with a scanner); where to scan next is
-// a NextScanPolicy's choice. docs/survey.md tells the loop's rules.
+// a NextScanPolicy's choice. docs/data-flow.md ("The survey loop") tells its rules.
 #pragma once
 
 #include <Eigen/Geometry>

@@ -1,4 +1,4 @@
-// Reading and validating scene files (shared/scene-format.md, version 1).
+// Reading and validating scene files (docs/scene-format.md, version 1).
 #include "semioctree/sim/scene.h"
 
 #include <Eigen/Geometry>

@@ -1,7 +1,7 @@
 // `semioctree map-nbv --map FILE --scanner X,Y,Z... --out DIR`: the next best view
 // for a map made elsewhere — an OctoMap occupancy map (.bt, or an OcTree .ot from
 // octomap_server or any OctoMap tool) or one of our SemiOcTree .ot files — without
-// our point-cloud pipeline (DESIGN.md "Drop-in for OctoMap users").
+// our point-cloud pipeline (docs/semioctree.md, "drop-in for OctoMap users").
 #include <chrono>
 #include <cmath>
 #include <cstdio>

@@ -1,5 +1,5 @@
 // Scene model of the synthetic scanner: the in-memory form of a `*.scene.json`
-// file (format version 1, see shared/scene-format.md), or of a triangle mesh /
+// file (format version 1, see docs/scene-format.md), or of a triangle mesh /
 // OctoMap .bt file given as a scene.
 #pragma once
 
