@@ -31,14 +31,8 @@ int main(int argc, char** argv) {
   }
   try {
     const sim::Scene scene = sim::load_scene(argv[1]);
-    SurveyParams params;  // the scanner's limits and the robot come from the scene
-    params.map.limits.min_range = scene.scanner.min_range;
-    params.map.limits.max_range = scene.scanner.max_range;
-    params.map.limits.elevation_min_deg = scene.scanner.elevation_min_deg;
-    params.map.limits.elevation_max_deg = scene.scanner.elevation_max_deg;
-    params.nbv.limits = params.map.limits;
-    params.robot.radius = scene.robot.radius;
-    params.robot.scanner_height = scene.scanner.height;
+    SurveyParams params;
+    sim_platform::apply_scene(scene, params);  // the scanner's limits, the robot
     params.preprocess.target_points = 400000;
     params.max_scans = argc > 2 ? std::strtoul(argv[2], nullptr, 10) : 10;
 

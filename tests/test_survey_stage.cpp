@@ -26,13 +26,7 @@ sim::Scene test_scene() {
 
 SurveyParams params_for(const sim::Scene& scene, std::size_t max_scans, double stop) {
   SurveyParams p;
-  p.map.limits.min_range = scene.scanner.min_range;
-  p.map.limits.max_range = scene.scanner.max_range;
-  p.map.limits.elevation_min_deg = scene.scanner.elevation_min_deg;
-  p.map.limits.elevation_max_deg = scene.scanner.elevation_max_deg;
-  p.nbv.limits = p.map.limits;
-  p.robot.radius = scene.robot.radius;
-  p.robot.scanner_height = scene.scanner.height;
+  sim_platform::apply_scene(scene, p);
   p.preprocess.target_points = 200000;
   p.max_scans = max_scans;
   p.stop_percent = stop;

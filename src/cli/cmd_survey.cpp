@@ -185,13 +185,8 @@ void run_survey(const SurveyOptions& o) {
       scene.scanner.height);
 
   SurveyParams p;
-  p.map.limits.min_range = scene.scanner.min_range;
-  p.map.limits.max_range = scene.scanner.max_range;
-  p.map.limits.elevation_min_deg = scene.scanner.elevation_min_deg;
-  p.map.limits.elevation_max_deg = scene.scanner.elevation_max_deg;
+  sim_platform::apply_scene(scene, p);
   apply_planning_options(o.plan, p, o.homogeneous);
-  p.robot.radius = scene.robot.radius;
-  p.robot.scanner_height = scene.scanner.height;
   p.max_scans = std::size_t(o.max_scans);
   if (o.homogeneous)
     std::printf("homogeneous grid of %.3f m voxels (the baseline): expect it to be slow\n",

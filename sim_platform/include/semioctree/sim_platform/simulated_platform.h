@@ -20,6 +20,10 @@
 
 namespace semioctree::sim_platform {
 
+// The survey parameters a scene fixes: the scanner's range and elevation limits (map and
+// NBV), the robot's radius and the scanner's height.
+void apply_scene(const sim::Scene& scene, SurveyParams& params);
+
 // The truth about one scan, known to the simulation only.
 struct ScanTruth {
   sim::Pose2 true_pose, reported_pose;  // world frame; reported: odometry
