@@ -1,23 +1,8 @@
 // Stage 2 (paper 2.3): scans after the first are placed in the survey frame by
 // the robot's reported (odometry) pose, then refined by ICP against the merged
 // cloud of the previous scans.
-//
-// Frames. The survey frame is levelled with the floor at z = 0 (as `preprocess`
-// leaves a cloud) and has the odometry's x, y and heading. For scan i, with its
-// points in the scanner frame and the reported pose (x_i, y_i, yaw_i):
-//   pre_i   = preprocess(points)                 // pre_i.transform: scanner → levelled scanner
-//   place_i = planar_pose(x_i, y_i, yaw_i)       // levelled scanner → survey (the guess)
-//   guess_i = place_i · pre_i.cloud              // in the survey frame
-// Scan 0 is not registered: guess_0 starts the merged cloud, and its pose is
-// place_0 · pre_0.transform. For i > 0:
-//   r = register_scan(guess_i, merged cloud of scans 0..i-1)
-//   registered cloud = r.correction · guess_i    // append it to the merged cloud
-//   scanner pose (scanner → survey) = r.correction · place_i · pre_i.transform
-// Levelling each scan in its own scanner frame, before placing it, keeps the
-// levelling rotation about the scanner (it cannot swing the scan sideways as a
-// rotation about a far survey origin would) and makes it independent of the
-// drifting odometry. A reported pose given as a ScanPose contributes only
-// position().x(), position().y() and yaw_deg(): the floor gives z and the tilt.
+// The frames and the order in which a scan is levelled, placed and refined:
+// docs/data-flow.md ("Frames").
 #pragma once
 
 #include <Eigen/Geometry>
