@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <unordered_set>
 
 #include "semioctree/preprocess.h"
 
@@ -47,6 +48,80 @@ std::vector<ScannerView> SurveyMap::views() const {
 }
 
 namespace {
+// A leaf octant of the map and its label.
+struct LabelledOctant {
+  octomap::OcTreeKey key;
+  unsigned level;
+  Label label;
+};
+
+constexpr std::uint32_t label_bit(Label l) {
+  return 1u << unsigned(l);
+}
+constexpr std::uint32_t kOpeningLabels = label_bit(Label::kDoor) | label_bit(Label::kWindow);
+
+// The leaf octants whose label is in `labels` (bit 1 << label).
+std::vector<LabelledOctant> octants_labelled(const SemiOcTree& tree, std::uint32_t labels) {
+  std::vector<LabelledOctant> out;
+  tree.for_each_octant([&](const Octant& o) {
+    if (labels & label_bit(o.label())) out.push_back({o.key, o.level, o.label()});
+  });
+  return out;
+}
+
+void relabel(SemiOcTree& tree, const std::vector<LabelledOctant>& octants, Label label) {
+  for (const LabelledOctant& o : octants) tree.set_label(o.key, o.level, label);
+}
+
+std::uint64_t pack_octant(const octomap::OcTreeKey& k, unsigned level, Label label) {
+  return (std::uint64_t(label) << 56) | (std::uint64_t(level) << 48) | (std::uint64_t(k[0]) << 32) |
+         (std::uint64_t(k[1]) << 16) | std::uint64_t(k[2]);
+}
+
+struct OpeningChange {
+  std::size_t dropped = 0;  // earlier opening octants no longer wholly of their label
+  bool added = false;       // an opening leaf now that lay in no earlier opening octant
+};
+
+// Compares the map's door and window octants with those it had `before`.
+OpeningChange compare_openings(const SemiOcTree& tree, const std::vector<LabelledOctant>& before) {
+  OpeningChange change;
+  const unsigned leaf = tree.leaf_level();
+  std::unordered_set<std::uint64_t> earlier;
+  for (const LabelledOctant& o : before) {
+    earlier.insert(pack_octant(o.key, o.level, o.label));
+    // Every leaf cell of the octant still has its label (openings are a leaf
+    // or two thick: an octant holds a few cells at most).
+    const unsigned side = 1u << (leaf - o.level);
+    bool kept = true;
+    for (unsigned i = 0; i < side && kept; ++i)
+      for (unsigned j = 0; j < side && kept; ++j)
+        for (unsigned k = 0; k < side && kept; ++k) {
+          const octomap::OcTreeKey cell(static_cast<octomap::key_type>(o.key[0] + i),
+                                        static_cast<octomap::key_type>(o.key[1] + j),
+                                        static_cast<octomap::key_type>(o.key[2] + k));
+          const std::optional<Octant> now = tree.find_octant(cell);
+          kept = now && now->label() == o.label;
+        }
+    change.dropped += !kept;
+  }
+  for (const LabelledOctant& o : octants_labelled(tree, kOpeningLabels)) {
+    bool known = false;
+    for (unsigned level = o.level + 1; level-- > 0 && !known;) {
+      const unsigned shift = leaf - level;
+      octomap::OcTreeKey k;
+      for (int a = 0; a < 3; ++a)
+        k[a] = static_cast<octomap::key_type>((o.key[a] >> shift) << shift);
+      known = earlier.count(pack_octant(k, level, o.label)) != 0;
+    }
+    if (!known) {
+      change.added = true;
+      break;
+    }
+  }
+  return change;
+}
+
 void require_a_scan(bool empty) {
   if (empty) throw std::logic_error("SurveyMap: no scan added yet (call add_scan first)");
 }
@@ -74,6 +149,9 @@ ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,
   rep.scan_index = scanners_.size();
   const bool first = !tree_;
   auto t0 = std::chrono::steady_clock::now();
+  // The openings the map held before this scan (its points may fill some).
+  const std::vector<LabelledOctant> openings_before =
+      first ? std::vector<LabelledOctant>{} : octants_labelled(*tree_, kOpeningLabels);
   if (first) {
     ceiling_ = ceiling_height;
     DiscretizeReport dr;
@@ -95,8 +173,14 @@ ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,
   t0 = std::chrono::steady_clock::now();
   openings_ =
       detect_openings(*merged_, ceiling_, *tree_, scanners_, params_.openings, &rep.openings);
+  // The map's doors and windows are the openings found now: earlier labels go
+  // (unknown: re-decided below) and the openings label their leaves afresh.
+  relabel(*tree_, octants_labelled(*tree_, kOpeningLabels), Label::kUnknown);
   label_openings(*tree_, openings_);
   rep.openings_found = openings_.size();
+  const OpeningChange change = compare_openings(*tree_, openings_before);
+  rep.opening_octants_dropped = change.dropped;
+  rep.opening_leaves_added = change.added && !first;
   rep.seconds_openings = since(t0);
 
   t0 = std::chrono::steady_clock::now();
@@ -106,10 +190,20 @@ ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,
   if (first) {
     rep.retest = study_occlusion(*tree_, all, op);
   } else {
+    // Space seen through a door or window that is gone may now be seen
+    // directly, or not at all: out is decided again from every position.
+    if (change.dropped > 0)
+      relabel(*tree_, octants_labelled(*tree_, label_bit(Label::kOut)), Label::kUnknown);
     op.scope = OcclusionScope::kUnknown;
     rep.new_space = study_occlusion(*tree_, all, op);
     op.scope = OcclusionScope::kNewViews;
     rep.retest = study_occlusion(*tree_, {all.back()}, op);
+    // Empty space that the earlier positions saw through what is only now
+    // an opening lies beyond it: out, unless some position sees it directly.
+    if (rep.opening_leaves_added) {
+      op.scope = OcclusionScope::kFreeThroughOpenings;
+      rep.through_openings = study_occlusion(*tree_, all, op);
+    }
   }
   rep.seconds_occlusion = since(t0);
   return rep;

@@ -5,12 +5,14 @@
 #include <octomap/OcTree.h>
 
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <random>
 #include <sstream>
 #include <tuple>
 #include <type_traits>
 
+#include "semioctree/octomap_ext/node_stream.h"
 #include "semioctree/octomap_ext/semioctree.h"
 
 namespace semioctree {
@@ -18,13 +20,13 @@ namespace {
 
 using OctantId = std::tuple<unsigned, unsigned, unsigned, unsigned>;  // key xyz, level
 
-std::map<OctantId, std::tuple<Label, float, std::uint8_t, std::uint16_t>> octant_map(
-    const SemiOcTree& t) {
-  std::map<OctantId, std::tuple<Label, float, std::uint8_t, std::uint16_t>> m;
+using OctantData = std::tuple<Label, float, std::uint16_t>;  // label, log-odds, aux
+
+std::map<OctantId, OctantData> octant_map(const SemiOcTree& t) {
+  std::map<OctantId, OctantData> m;
   t.for_each_octant([&](const Octant& o) {
-    m[{o.key.k[0], o.key.k[1], o.key.k[2], o.level}] = std::make_tuple(
-        o.label(), o.node->getLogOdds(),
-        std::uint8_t(o.node->flags() & SemiOcTreeNode::kPersistentFlags), o.node->aux());
+    m[{o.key.k[0], o.key.k[1], o.key.k[2], o.level}] =
+        std::make_tuple(o.label(), o.node->getLogOdds(), o.node->aux());
   });
   return m;
 }
@@ -32,9 +34,7 @@ std::map<OctantId, std::tuple<Label, float, std::uint8_t, std::uint16_t>> octant
 // The coarse index (a hash map) must agree with the tree itself: every octant
 // octant_map found by walking from the root is found again through the index,
 // and the index holds exactly the coarse nodes the tree walk hands over.
-void expect_index_agrees(
-    const SemiOcTree& t,
-    const std::map<OctantId, std::tuple<Label, float, std::uint8_t, std::uint16_t>>& m) {
+void expect_index_agrees(const SemiOcTree& t, const std::map<OctantId, OctantData>& m) {
   for (const auto& [id, value] : m) {
     const auto& [x, y, z, level] = id;
     const auto o = t.find_octant(octomap::OcTreeKey(x, y, z));
@@ -42,7 +42,7 @@ void expect_index_agrees(
     EXPECT_EQ(o->level, level) << "key " << x << " " << y << " " << z;
     EXPECT_EQ(o->label(), std::get<0>(value)) << "key " << x << " " << y << " " << z;
     EXPECT_EQ(o->node->getLogOdds(), std::get<1>(value));
-    EXPECT_EQ(o->node->aux(), std::get<3>(value));
+    EXPECT_EQ(o->node->aux(), std::get<2>(value));
   }
   std::size_t coarse = 0;
   t.for_each_coarse([&](const CoarseIndex& c, const SemiOcTreeNode* node) {
@@ -64,12 +64,15 @@ TEST(SemiOcTreeNode, IsSixteenBytesAndKeepsLabel) {
   EXPECT_EQ(n.label(), Label::kUnknown);
   n.set_label(Label::kWindow);
   n.set_aux(513);
-  n.set_flag(SemiOcTreeNode::kSeen, true);
+  n.set_flag(SemiOcTreeNode::kCoarseRoot, true);
+  n.set_flag(SemiOcTreeNode::kMarked, true);
   SemiOcTreeNode m;
   m.copyData(n);
   EXPECT_EQ(m.label(), Label::kWindow);
   EXPECT_EQ(m.aux(), 513);
-  EXPECT_TRUE(m.has_flag(SemiOcTreeNode::kSeen));
+  // The flags are the tree's own bookkeeping of this node: not copied.
+  EXPECT_FALSE(m.has_flag(SemiOcTreeNode::kCoarseRoot));
+  EXPECT_FALSE(m.has_flag(SemiOcTreeNode::kMarked));
   EXPECT_TRUE(m == n);
   m.set_label(Label::kDoor);
   EXPECT_FALSE(m == n);
@@ -77,6 +80,7 @@ TEST(SemiOcTreeNode, IsSixteenBytesAndKeepsLabel) {
 
 TEST(SemiOcTree, ValidatesLeafAndCoarseSize) {
   EXPECT_EQ(SemiOcTree(0.05, 0.8).coarse_level(), 4u);
+  EXPECT_EQ(SemiOcTree(0.05, 0.8).leaf_level(), 4u);  // the leaves' level, k
   EXPECT_EQ(SemiOcTree(0.05, 0.05).coarse_level(), 0u);
   EXPECT_EQ(SemiOcTree(0.1, 0.8).coarse_level(), 3u);
   try {
@@ -269,7 +273,6 @@ TEST(SemiOcTree, OtRoundTripIsLossless) {
   for (int i = 0; i < 500; ++i) {
     SemiOcTreeNode* n = t.set_label(key_at(t, u(rng), u(rng), u(rng)), lvl(rng), Label(lab(rng)));
     n->set_aux(std::uint16_t(aux(rng)));
-    n->set_flag(SemiOcTreeNode::kSeen, i % 2 == 0);
   }
   std::stringstream buf;
   ASSERT_TRUE(t.write(buf));
@@ -285,6 +288,38 @@ TEST(SemiOcTree, OtRoundTripIsLossless) {
   EXPECT_EQ(octant_map(*back), original);
   // The coarse index is rebuilt on reading.
   expect_index_agrees(*back, original);
+}
+
+// Files written before the node flags kSeen and kBoundary were dropped may
+// hold them in each node's reserved byte: such a file still loads, the same.
+TEST(SemiOcTree, ReadsFilesWithTheOldNodeFlags) {
+  SemiOcTree t(0.05, 0.4);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_int_distribution<int> lvl(0, 3), lab(0, kLabelCount - 1);
+  for (int i = 0; i < 200; ++i)
+    t.set_label(key_at(t, u(rng), u(rng), u(rng)), lvl(rng), Label(lab(rng)));
+  std::stringstream buf;
+  t.writeData(buf);
+  std::string data = buf.str();
+  // Payload header: 48 bytes, the node stream's FNV-1a hash in its last 8. Each
+  // node: 8 bytes of data (the reserved byte at 5), then its child mask.
+  constexpr std::size_t kHeader = 48, kRecord = SemiOcTreeNode::kSerializedBytes + 1;
+  ASSERT_EQ((data.size() - kHeader) % kRecord, 0u);
+  for (std::size_t at = kHeader; at < data.size(); at += kRecord)
+    data[at + 5] = char((at / kRecord) % 2 ? 0x06 : 0x02);  // kSeen | kBoundary, kSeen
+  const std::uint64_t hash = fnv1a64(data.data() + kHeader, data.size() - kHeader);
+  std::memcpy(&data[kHeader - 8], &hash, 8);
+  std::istringstream in(data);
+  SemiOcTree back(0.05);
+  ASSERT_NO_THROW(back.readData(in));
+  const auto original = octant_map(t);
+  EXPECT_EQ(octant_map(back), original);
+  expect_index_agrees(back, original);
+  // Written again, the reserved bytes are 0: the file of the original tree.
+  std::stringstream again;
+  back.writeData(again);
+  EXPECT_EQ(again.str(), buf.str());
 }
 
 TEST(SemiOcTree, ReadDataRejectsCorruptPayload) {

@@ -103,6 +103,93 @@ TEST(Update, SecondScanRefinesTheMapLikeARebuild) {
   }
 }
 
+// A 4 × 4 × 2.4 m room whose wall at x = 4 has a door 1 m wide and 2 m high
+// (y from 1.5 to 2.5) into a 2 m deep alcove behind it. Without `lintel` the
+// wall above the door returned no points (a dark lintel): the gap reaches the
+// ceiling and is no door. With `door_panel` the door is shut by a sparse grid
+// of points (one every 0.1 m, as a mesh or a dim panel gives): no hole is left.
+Cloud door_room_scan(bool lintel, bool door_panel) {
+  Cloud c;
+  const double step = 0.02;
+  for (double z = step; z < 2.4; z += step) {
+    for (double t = 0; t <= 4.0; t += step) {
+      add(c, t, 0.01, z);
+      add(c, t, 3.99, z);
+      add(c, 0.01, t, z);
+      const bool in_door = t > 1.5 && t < 2.5;
+      if (!in_door || (lintel && z >= 2.0)) add(c, 3.99, t, z);
+    }
+    for (double t = 0; t <= 2.0; t += step) {
+      add(c, 4.0 + t, 1.51, z);
+      add(c, 4.0 + t, 2.49, z);
+      if (t <= 1.0) add(c, 5.99, 1.5 + t, z);
+    }
+  }
+  if (door_panel)
+    for (double y = 1.55; y < 2.5; y += 0.1)
+      for (double z = 0.05; z < 2.0; z += 0.1) add(c, 3.99, y, z);
+  return c;
+}
+
+// Door and window octants of the map (m³).
+double opening_volume(const SemiOcTree& t) {
+  const auto v = volumes(t);
+  return (v.count(Label::kDoor) ? v.at(Label::kDoor) : 0.0) +
+         (v.count(Label::kWindow) ? v.at(Label::kWindow) : 0.0);
+}
+
+const Point3 kInAlcove(5.0, 2.0, 1.0);  // seen only through the door
+
+// A gap taken for a door at the first scan and shut at the second: its labels
+// go, and what was seen through it is no longer out.
+TEST(Update, AnOpeningNoLongerFoundLosesItsLabels) {
+  SurveyMap map(params());
+  map.add_scan(door_room_scan(true, false), Point3(1.0, 2.0, 1.2), 2.4);
+  ASSERT_EQ(map.openings().size(), 1u);
+  ASSERT_EQ(map.openings()[0].kind, OpeningKind::kDoor);
+  EXPECT_GT(opening_volume(map.tree()), 0.0);
+  ASSERT_EQ(map.tree().find_octant(kInAlcove)->label(), Label::kOut);
+
+  const ScanUpdateReport second =
+      map.add_scan(door_room_scan(true, true), Point3(2.0, 3.0, 1.2), 2.4);
+  ASSERT_TRUE(map.openings().empty());
+  EXPECT_GT(second.opening_octants_dropped, 0u);
+  EXPECT_FALSE(second.opening_leaves_added);
+  // The map's doors and windows are the openings' (survey.json lists none).
+  EXPECT_EQ(opening_volume(map.tree()), 0.0);
+  // Seen through the panel's gaps, or hidden by its points: not out.
+  EXPECT_NE(map.tree().find_octant(kInAlcove)->label(), Label::kOut);
+  map.tree().for_each_octant([&](const Octant& o) { EXPECT_NE(o.label(), Label::kUnknown); });
+}
+
+// A door found only at the second scan (the first saw no wall above it): what
+// the first scan saw through it is out, as seen from scratch with both scans.
+TEST(Update, AnOpeningFoundLaterMakesWhatWasSeenThroughItOut) {
+  const Point3 a(1.0, 2.0, 1.2), b(2.0, 3.0, 1.2);
+  SurveyMap map(params());
+  map.add_scan(door_room_scan(false, false), a, 2.4);
+  ASSERT_TRUE(map.openings().empty());
+  ASSERT_EQ(map.tree().find_octant(kInAlcove)->label(), Label::kEmpty);
+
+  const ScanUpdateReport second = map.add_scan(door_room_scan(true, false), b, 2.4);
+  ASSERT_EQ(map.openings().size(), 1u);
+  EXPECT_TRUE(second.opening_leaves_added);
+  EXPECT_GT(second.through_openings.out, 0u);
+  EXPECT_GT(opening_volume(map.tree()), 0.0);
+  EXPECT_EQ(map.tree().find_octant(kInAlcove)->label(), Label::kOut);
+
+  // Classified from scratch with both scans, as much is out.
+  Cloud both = door_room_scan(false, false);
+  both += door_room_scan(true, false);
+  auto rebuilt = discretize(both, 2.4, params().grid);
+  label_openings(*rebuilt, detect_openings(both, 2.4, *rebuilt, {a, b}));
+  study_occlusion(*rebuilt, map.views());
+  const auto got = volumes(map.tree()), want = volumes(*rebuilt);
+  ASSERT_GT(want.count(Label::kOut), 0u);
+  ASSERT_GT(got.count(Label::kOut), 0u);
+  EXPECT_NEAR(got.at(Label::kOut), want.at(Label::kOut), 0.01 * want.at(Label::kOut));
+}
+
 TEST(Update, PointsAboveTheFirstCeilingAreLeftOut) {
   SurveyMap map(params());
   // Before the first scan there is no map to look at.

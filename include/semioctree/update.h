@@ -3,9 +3,13 @@
 // later scan, registered into the same (survey) frame, refines that map
 // instead of rebuilding it: the coarse grid grows over new ground (new voxels
 // unknown), its points make their leaves occupied (the finer resolution wins),
-// openings are detected again on the merged cloud, space new to the map is
-// classified from every position, and only what is still occluded or out is
-// re-tested, from the new position (its direct view wins). Because the coarse
+// openings are detected again on the merged cloud and replace the map's doors
+// and windows, space new to the map (and the leaves of openings no longer
+// found) is classified from every position, and only what is still occluded or
+// out is re-tested, from the new position (its direct view wins). Space whose
+// classification depended on an opening that came or went is tested again:
+// out space from every position when an opening shrank or went, empty space
+// when one grew or came (what is seen only through it becomes out). Because the coarse
 // grid is fixed to the world, the voxels of every scan coincide.
 #pragma once
 
@@ -34,8 +38,16 @@ struct ScanUpdateReport {
   std::size_t occupied_leaves = 0;  // distinct leaves of this scan's points
   OpeningsReport openings;
   std::size_t openings_found = 0;
+  // Later scans: door and window octants of the map that lie in no opening
+  // found now (their space, and all out space, is decided again in new_space),
+  // and whether the openings found now take leaves that were no opening before.
+  std::size_t opening_octants_dropped = 0;
+  bool opening_leaves_added = false;
   OcclusionReport new_space;  // unknown octants, from every position (later scans)
   OcclusionReport retest;     // first scan: everything; later: occluded/out from the new position
+  // Later scans whose openings took new leaves: empty octants from every
+  // position, those seen only through an opening becoming out.
+  OcclusionReport through_openings;
   double seconds_occupancy = 0, seconds_openings = 0, seconds_occlusion = 0;
 };
 

@@ -10,7 +10,7 @@ std::unique_ptr<SemiOcTree> from_occupancy_octree(const octomap::OcTree& map, do
                                                   Label unobserved, OccupancyImportReport* report) {
   auto tree = std::make_unique<SemiOcTree>(map.getResolution(), coarse_size);
   OccupancyImportReport rep;
-  const unsigned k = tree->coarse_level();
+  const unsigned k = tree->leaf_level();
   const unsigned coarse_depth = tree->coarse_depth();
   const unsigned max_depth = SemiOcTree::kTreeDepth;
   // OctoMap's iterator gives a node at depth d < 16 the key of its centre cell: its

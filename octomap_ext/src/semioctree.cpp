@@ -2,11 +2,10 @@
 
 #include <cstring>
 #include <istream>
-#include <memory>
-#include <mutex>
-#include <new>
 #include <ostream>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "semioctree/octomap_ext/node_stream.h"
 
@@ -19,7 +18,7 @@ std::istream& SemiOcTreeNode::readData(std::istream& s) {
   s.read(buf, sizeof(buf));
   std::memcpy(&value, buf, 4);
   label_ = static_cast<std::uint8_t>(buf[4]);
-  flags_ = static_cast<std::uint8_t>(buf[5]) & kPersistentFlags;
+  // buf[5] is reserved (see kSerializedBytes); the in-memory flags stay as they are.
   std::memcpy(&aux_, buf + 6, 2);
   return s;
 }
@@ -28,93 +27,9 @@ std::ostream& SemiOcTreeNode::writeData(std::ostream& s) const {
   char buf[kSerializedBytes];
   std::memcpy(buf, &value, 4);
   buf[4] = static_cast<char>(label_);
-  buf[5] = static_cast<char>(flags_ & kPersistentFlags);
+  buf[5] = 0;  // reserved
   std::memcpy(buf + 6, &aux_, 2);
   return s.write(buf, sizeof(buf));
-}
-
-namespace {
-
-// Free list of node slots carved from 64 KiB blocks. Blocks are kept for the
-// life of the process (freed slots are reused), so nodes of trees built one
-// after another stay dense.
-class NodePool {
- public:
-  void* allocate() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (fresh_depth_ > 0) return bump();
-    if (!free_) refill();
-    Slot* s = free_;
-    free_ = s->next;
-    return s;
-  }
-  void release(void* p) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    Slot* s = static_cast<Slot*>(p);
-    s->next = free_;
-    free_ = s;
-  }
-  // While a FreshNodes guard lives, nodes come from untouched memory in
-  // allocation order instead of the free list (used by SemiOcTree::compact).
-  void begin_fresh() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    ++fresh_depth_;
-  }
-  void end_fresh() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    --fresh_depth_;
-  }
-
- private:
-  union Slot {
-    Slot* next;
-    alignas(SemiOcTreeNode) unsigned char bytes[sizeof(SemiOcTreeNode)];
-  };
-  static constexpr std::size_t kSlotsPerBlock = 4096;
-  void refill() {
-    blocks_.push_back(std::make_unique<Slot[]>(kSlotsPerBlock));
-    Slot* block = blocks_.back().get();
-    for (std::size_t i = kSlotsPerBlock; i-- > 0;) {
-      block[i].next = free_;
-      free_ = &block[i];
-    }
-  }
-  Slot* bump() {
-    if (bump_left_ == 0) {
-      blocks_.push_back(std::make_unique<Slot[]>(kSlotsPerBlock));
-      bump_next_ = blocks_.back().get();
-      bump_left_ = kSlotsPerBlock;
-    }
-    --bump_left_;
-    return bump_next_++;
-  }
-  std::mutex mutex_;
-  Slot* free_ = nullptr;
-  int fresh_depth_ = 0;
-  Slot* bump_next_ = nullptr;
-  std::size_t bump_left_ = 0;
-  std::vector<std::unique_ptr<Slot[]>> blocks_;
-};
-
-NodePool& node_pool() {
-  static NodePool* pool = new NodePool;  // never destroyed: nodes may outlive statics
-  return *pool;
-}
-
-}  // namespace
-
-void* SemiOcTreeNode::operator new(std::size_t size) {
-  if (size != sizeof(SemiOcTreeNode)) return ::operator new(size);  // a derived node type
-  return node_pool().allocate();
-}
-
-void SemiOcTreeNode::operator delete(void* p, std::size_t size) noexcept {
-  if (!p) return;
-  if (size != sizeof(SemiOcTreeNode)) {
-    ::operator delete(p);
-    return;
-  }
-  node_pool().release(p);
 }
 
 std::optional<Label> label_from_name(std::string_view name) {
@@ -211,7 +126,7 @@ std::uint64_t SemiOcTree::pack(const octomap::OcTreeKey& c) {
 }
 
 CoarseIndex SemiOcTree::coarse_index(const octomap::OcTreeKey& key) const {
-  const int off = int(tree_max_val >> coarse_level_);
+  const int off = int(kKeyOrigin >> coarse_level_);
   return {int(key.k[0] >> coarse_level_) - off, int(key.k[1] >> coarse_level_) - off,
           int(key.k[2] >> coarse_level_) - off};
 }
@@ -228,7 +143,7 @@ bool SemiOcTree::coarse_index_of(const Point3& p, CoarseIndex& out) const {
 }
 
 octomap::OcTreeKey SemiOcTree::coarse_key(const CoarseIndex& c) const {
-  const int off = int(tree_max_val >> coarse_level_);
+  const int off = int(kKeyOrigin >> coarse_level_);
   const int lim = int(1u << (kTreeDepth - coarse_level_));
   const int v[3] = {c.x + off, c.y + off, c.z + off};
   octomap::OcTreeKey key;
@@ -246,7 +161,7 @@ Point3 SemiOcTree::coarse_min_corner(const CoarseIndex& c) const {
 }
 
 SemiOcTreeNode* SemiOcTree::find_coarse(const CoarseIndex& c) const {
-  const int off = int(tree_max_val >> coarse_level_);
+  const int off = int(kKeyOrigin >> coarse_level_);
   const int lim = int(1u << (kTreeDepth - coarse_level_));
   const int v[3] = {c.x + off, c.y + off, c.z + off};
   for (int x : v)
@@ -299,9 +214,9 @@ Octant SemiOcTree::make_octant(const octomap::OcTreeKey& key, unsigned level,
   o.level = level;
   o.size = octant_size(level);
   const double half = 0.5 * o.size;
-  o.center = Point3((double(o.key.k[0]) - tree_max_val) * resolution + half,
-                    (double(o.key.k[1]) - tree_max_val) * resolution + half,
-                    (double(o.key.k[2]) - tree_max_val) * resolution + half);
+  o.center = Point3((double(o.key.k[0]) - double(kKeyOrigin)) * resolution + half,
+                    (double(o.key.k[1]) - double(kKeyOrigin)) * resolution + half,
+                    (double(o.key.k[2]) - double(kKeyOrigin)) * resolution + half);
   o.node = node;
   return o;
 }
@@ -500,15 +415,10 @@ void SemiOcTree::clear() {
 
 void SemiOcTree::compact() {
   if (!root) return;
-  // Copy into fresh, consecutive node memory: all coarse voxels side by side
-  // (nearly every traversal step touches one first), each voxel's octree in a
-  // block of its own, and the 8 children of a node next to each other.
-  struct FreshNodes {
-    FreshNodes() { node_pool().begin_fresh(); }
-    ~FreshNodes() { node_pool().end_fresh(); }
-  };
+  // Copy into nodes allocated in traversal order: all coarse voxels one after
+  // another (nearly every traversal step touches one first), then each voxel's
+  // octree by itself, the 8 children of a node one after another.
   SemiOcTree fresh(resolution);
-  FreshNodes fresh_nodes;
   fresh.root = new SemiOcTreeNode();
   fresh.tree_size = 1;
   fresh.root->copyData(*root);

@@ -24,6 +24,10 @@
 
 namespace semioctree {
 
+// OctoMap's key of coordinate 0 on every axis (its tree_max_val, 2^15 in a tree
+// of depth 16): the leaf cell [i r, (i+1) r) has key i + kKeyOrigin.
+constexpr std::int64_t kKeyOrigin = 32768;
+
 // A point in world coordinates (metres), in double precision: OctoMap's point3d
 // is float, which puts points on cell boundaries into the wrong cell.
 struct Point3 {
@@ -44,7 +48,7 @@ struct CoarseIndex {
 // One leaf of the octant structure (an octant that is not split further).
 struct Octant {
   octomap::OcTreeKey key;  // key of the octant's minimum corner cell
-  unsigned level = 0;      // 0 = coarse voxel, coarse_level() = leaf size
+  unsigned level = 0;      // 0 = coarse voxel, leaf_level() = leaf size
   double size = 0;         // side length in metres
   Point3 center;
   const SemiOcTreeNode* node = nullptr;  // null only for space outside any coarse voxel
@@ -75,7 +79,7 @@ enum class TraversalEnd {
 // An octant crossed by a segment, handed to the traversal visitor.
 struct RayStep {
   octomap::OcTreeKey key;                // minimum-corner key of the octant
-  unsigned level = 0;                    // 0 = coarse voxel ... coarse_level() = leaf
+  unsigned level = 0;                    // 0 = coarse voxel ... leaf_level() = leaf
   const SemiOcTreeNode* node = nullptr;  // null: no coarse voxel there (unknown space)
   double t_enter = 0;                    // segment parameter in [0, 1] where the octant is entered
   // A split octant crossed in one step (traverse_marked: nothing marked below);
@@ -90,6 +94,7 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
  public:
   static constexpr unsigned kTreeDepth = 16;
   static constexpr unsigned kMaxCoarseLevel = 12;
+  static_assert(kKeyOrigin == std::int64_t(1) << (kTreeDepth - 1), "OctoMap's key of 0");
 
   // Leaf size r and coarse size L; L must be r·2^k for an integer 0 ≤ k ≤ 12,
   // else std::invalid_argument with a message saying so.
@@ -110,9 +115,13 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
 
   double leaf_size() const { return resolution; }
   double coarse_size() const { return resolution * double(1u << coarse_level_); }
+  // Level of the leaf octants, k (coarse = leaf·2^k): levels run from 0 (coarse
+  // voxel) to leaf_level() (leaf).
+  unsigned leaf_level() const { return coarse_level_; }
+  // Deprecated: the same as leaf_level() (the name says the opposite; it goes).
   unsigned coarse_level() const { return coarse_level_; }
   unsigned coarse_depth() const { return kTreeDepth - coarse_level_; }
-  // Edge of an octant of `level` (0 = coarse voxel ... coarse_level() = leaf);
+  // Edge of an octant of `level` (0 = coarse voxel ... leaf_level() = leaf);
   // std::out_of_range for a level finer than the leaf.
   double octant_size(unsigned level) const {
     if (level > coarse_level_) throw std::out_of_range("octant level finer than the leaf");
@@ -165,9 +174,9 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
   void prune() override;
   bool isNodeCollapsible(const SemiOcTreeNode* node) const override;
   void clear() override;
-  // Re-allocates all nodes in depth-first order, so that each coarse voxel's
-  // octree sits together in memory: traversal after many edits is then
-  // cache-friendly (measured ~1.5x faster on a room map). Labels are unchanged.
+  // Re-allocates every node, in traversal order: the coarse voxels one after
+  // another, then each coarse voxel's octree by itself. Octants, labels and the
+  // coarse index are unchanged; node pointers taken before are invalid.
   void compact();
 
   // --- ray traversal ------------------------------------------------------------

@@ -132,9 +132,9 @@ bool SemiOcTree::traverse_children(const SegmentFrame& f, const SemiOcTreeNode* 
                                           visit))
         return false;
     } else {
-      const octomap::OcTreeKey key(static_cast<octomap::key_type>(child_base[0] + 32768),
-                                   static_cast<octomap::key_type>(child_base[1] + 32768),
-                                   static_cast<octomap::key_type>(child_base[2] + 32768));
+      const octomap::OcTreeKey key(static_cast<octomap::key_type>(child_base[0] + kKeyOrigin),
+                                   static_cast<octomap::key_type>(child_base[1] + kKeyOrigin),
+                                   static_cast<octomap::key_type>(child_base[2] + kKeyOrigin));
       if (!visit(RayStep{key, level + 1, c,
                          t_cur == -std::numeric_limits<double>::infinity() ? 0.0 : t_cur, split}))
         return false;
@@ -162,7 +162,7 @@ TraversalEnd SemiOcTree::traverse_impl(const Point3& a, const Point3& b, Visitor
   SegmentFrame f;
   const double inv = resolution_factor;
   const double P[2][3] = {{a.x * inv, a.y * inv, a.z * inv}, {b.x * inv, b.y * inv, b.z * inv}};
-  constexpr double kKeyHalf = 32768.0;
+  constexpr double kKeyHalf = double(kKeyOrigin);
   for (int i = 0; i < 3; ++i) {
     const double fa = std::floor(P[0][i]), fb = std::floor(P[1][i]);
     if (!(fa >= -kKeyHalf && fa < kKeyHalf && fb >= -kKeyHalf && fb < kKeyHalf))
@@ -208,7 +208,7 @@ TraversalEnd SemiOcTree::traverse_impl(const Point3& a, const Point3& b, Visitor
 #pragma GCC unroll 3
     for (int i = 0; i < 3; ++i) {
       base[i] = cc[i] * span;
-      key.k[i] = static_cast<octomap::key_type>(base[i] + 32768);
+      key.k[i] = static_cast<octomap::key_type>(base[i] + kKeyOrigin);
     }
     // O(1) access to the coarse voxel through the hashed grid.
     const SemiOcTreeNode* node =

@@ -13,17 +13,13 @@ namespace semioctree {
 
 class SemiOcTreeNode : public octomap::OcTreeNode {
  public:
-  // Flags kept with the node. kCoarseRoot is structural (set by the tree on the
-  // nodes of the coarse grid) and is neither copied nor written to files.
+  // Flags kept with the node, in memory only (neither copied nor written to files).
   enum Flag : std::uint8_t {
-    kCoarseRoot = 1u << 0,
-    kSeen = 1u << 1,      // direct line of sight from some scanner position
-    kBoundary = 1u << 2,  // partly visible octant (split during the occlusion study)
+    kCoarseRoot = 1u << 0,  // set by the tree on the nodes of the coarse grid
     // Set by SemiOcTree::mark_subtrees on split octants whose subtree holds a
-    // leaf with one of the asked labels; transient (not copied, not written).
-    kMarked = 1u << 3,
+    // leaf with one of the asked labels.
+    kMarked = 1u << 1,
   };
-  static constexpr std::uint8_t kPersistentFlags = kSeen | kBoundary;
 
   SemiOcTreeNode() = default;
 
@@ -43,19 +39,14 @@ class SemiOcTreeNode : public octomap::OcTreeNode {
     octomap::OcTreeNode::copyData(from);
     label_ = from.label_;
     aux_ = from.aux_;
-    flags_ = static_cast<std::uint8_t>((flags_ & kCoarseRoot) | (from.flags_ & kPersistentFlags));
+    flags_ = static_cast<std::uint8_t>(flags_ & kCoarseRoot);
   }
   bool operator==(const SemiOcTreeNode& rhs) const {
-    return rhs.value == value && rhs.label_ == label_ &&
-           (rhs.flags_ & kPersistentFlags) == (flags_ & kPersistentFlags) && rhs.aux_ == aux_;
+    return rhs.value == value && rhs.label_ == label_ && rhs.aux_ == aux_;
   }
 
-  // Nodes come from a pool of 16-byte slots: half the footprint of malloc's
-  // 32-byte chunks, so more of a map stays in cache during ray traversal.
-  static void* operator new(std::size_t size);
-  static void operator delete(void* p, std::size_t size) noexcept;
-
-  // Serialized form in .ot files: log-odds, label, persistent flags, aux (8 bytes).
+  // Serialized form in .ot files: log-odds, label, a reserved byte (written 0,
+  // ignored when read: older files kept two never-set flags there), aux (8 bytes).
   static constexpr std::size_t kSerializedBytes = 8;
   std::istream& readData(std::istream& s);
   std::ostream& writeData(std::ostream& s) const;
