@@ -27,7 +27,7 @@ void add_box_surface(SemiOcTree& t, Point3 lo, Point3 hi) {
                              z < lo.z + r || z > hi.z - r;
         octomap::OcTreeKey key;
         if (surface && t.key_of({x, y, z}, key))
-          t.set_label(key, t.coarse_level(), Label::kOccupied);
+          t.set_label(key, t.leaf_level(), Label::kOccupied);
       }
 }
 
@@ -81,7 +81,7 @@ int main(int argc, char** argv) {
     }
     octomap::OcTreeKey key;
     tree.key_of(scanner, key);
-    tree.set_label(key, tree.coarse_level(), Label::kScan);
+    tree.set_label(key, tree.leaf_level(), Label::kScan);
     tree.prune();
     tree.compact();
     const double secs =

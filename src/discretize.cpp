@@ -101,7 +101,7 @@ std::size_t mark_occupied(SemiOcTree& tree, const Cloud& cloud, double ceiling_h
   // descent per point would cost more than the labelling itself), and the
   // leaves are labelled in Morton (depth-first) order, so that successive
   // descents share their path and find it in cache.
-  const unsigned leaf = tree.coarse_level();
+  const unsigned leaf = tree.leaf_level();
   PackedKeyMap<std::uint32_t> seen(cloud.size());
   std::vector<std::uint64_t> order;
   order.reserve(cloud.size());

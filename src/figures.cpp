@@ -144,7 +144,7 @@ double volume_percent(const OctantStatistics& s, Label l) {
 
 DiscretizationRun describe_run(const SemiOcTree& tree, double seconds) {
   DiscretizationRun run;
-  run.method = tree.coarse_level() == 0 ? "homogeneous" : "semioctree";
+  run.method = tree.leaf_level() == 0 ? "homogeneous" : "semioctree";
   run.leaf = tree.leaf_size();
   run.coarse = tree.coarse_size();
   run.stats = tree.statistics();

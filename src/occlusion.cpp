@@ -154,11 +154,6 @@ constexpr std::size_t kMaxDoorCells = 200000;
 // Door octants (min-corner key and level, packed) of the door the view stands in.
 using DoorSet = std::unordered_set<std::uint64_t>;
 
-std::uint64_t pack_octant(const octomap::OcTreeKey& k, unsigned level) {
-  return (std::uint64_t(level) << 48) | (std::uint64_t(k[0]) << 32) | (std::uint64_t(k[1]) << 16) |
-         std::uint64_t(k[2]);
-}
-
 DoorSet own_door(const SemiOcTree& tree, const Point3& c) {
   DoorSet door;
   const double r = tree.leaf_size();
@@ -193,7 +188,7 @@ DoorSet own_door(const SemiOcTree& tree, const Point3& c) {
     todo.pop_back();
     const std::optional<Octant> o = door_at(q);
     if (!o) continue;
-    door.insert(pack_octant(o->key, o->level));
+    door.insert(pack_octant_key(o->key, o->level));
     for (int i = -1; i <= 1; ++i)
       for (int j = -1; j <= 1; ++j)
         for (int k = -1; k <= 1; ++k) {
@@ -251,7 +246,7 @@ Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, con
       return false;
     }
     through_opening |= l == Label::kWindow ||
-                       (l == Label::kDoor && !lim.own_door.count(pack_octant(s.key, s.level)));
+                       (l == Label::kDoor && !lim.own_door.count(pack_octant_key(s.key, s.level)));
     return true;
   };
   if (kMarked)
@@ -325,30 +320,28 @@ struct Candidate {
 };
 
 // Sample points live on the lattice of half leaves: coordinate u (per axis)
-// is the point (u / 2 − 32768)·r. Corners of octants are even, leaf centres
+// is the point (u / 2 − kKeyOrigin)·r. Corners of octants are even, leaf centres
 // odd, and the centre of an octant is a corner of its children, so the
 // samples of neighbouring octants and of successive levels coincide and each
 // is cast once.
 using LatticePoint = std::uint64_t;
 
-LatticePoint pack(std::uint32_t u, std::uint32_t v, std::uint32_t w) {
-  return (std::uint64_t(u) << 42) | (std::uint64_t(v) << 21) | std::uint64_t(w);
-}
-
 Point3 unpack(LatticePoint p, double leaf) {
-  auto coord = [leaf](std::uint64_t u) { return (0.5 * double(u) - 32768.0) * leaf; };
-  return {coord(p >> 42), coord((p >> 21) & 0x1fffff), coord(p & 0x1fffff)};
+  auto coord = [leaf, p](int axis) {
+    return (0.5 * double(unpack_cell_part(p, axis)) - double(kKeyOrigin)) * leaf;
+  };
+  return {coord(0), coord(1), coord(2)};
 }
 
 // The centre (index 0) and the 8 corners of an octant; a leaf has only its centre.
-int samples_of(const Candidate& c, unsigned coarse_level, LatticePoint out[9]) {
-  const std::uint32_t size = 1u << (coarse_level - c.level);  // in leaves
+int samples_of(const Candidate& c, unsigned leaf_level, LatticePoint out[9]) {
+  const std::uint32_t size = 1u << (leaf_level - c.level);  // in leaves
   const std::uint32_t x = 2u * c.key.k[0], y = 2u * c.key.k[1], z = 2u * c.key.k[2];
-  out[0] = pack(x + size, y + size, z + size);
-  if (c.level == coarse_level) return 1;
+  out[0] = pack_cell_parts(x + size, y + size, z + size);
+  if (c.level == leaf_level) return 1;
   for (int k = 0; k < 8; ++k)
-    out[k + 1] = pack(x + ((k & 1) ? 2 * size : 0), y + ((k & 2) ? 2 * size : 0),
-                      z + ((k & 4) ? 2 * size : 0));
+    out[k + 1] = pack_cell_parts(x + ((k & 1) ? 2 * size : 0), y + ((k & 2) ? 2 * size : 0),
+                                 z + ((k & 4) ? 2 * size : 0));
   return 9;
 }
 
@@ -393,7 +386,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
   });
   OcclusionReport report;
   const unsigned threads = detail::thread_count(params.threads);
-  const unsigned leaf = tree.coarse_level();
+  const unsigned leaf = tree.leaf_level();
   const double leaf_size = tree.leaf_size();
   PackedKeyMap<std::uint32_t> index;     // lattice point → sample id
   std::vector<LatticePoint> points;      // by sample id

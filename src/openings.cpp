@@ -414,7 +414,7 @@ std::optional<double> map_ceiling_height(const SemiOcTree& tree, double min_heig
   const double r = tree.leaf_size();
   std::map<std::int64_t, std::size_t> per_layer;  // leaf layer (z key) → occupied leaves
   tree.for_each_octant([&](const Octant& o) {
-    if (o.label() == Label::kOccupied) ++per_layer[std::int64_t(o.key.k[2]) - 32768];
+    if (o.label() == Label::kOccupied) ++per_layer[leaf_cell(o.key.k[2])];
   });
   auto centre_of = [r](std::int64_t layer) { return (double(layer) + 0.5) * r; };
   std::size_t floor = 0;
@@ -440,7 +440,7 @@ std::vector<DetectedOpening> detect_openings_in_map(const SemiOcTree& tree, doub
   Cloud centres;
   tree.for_each_octant([&](const Octant& o) {
     if (o.label() != Label::kOccupied) return;
-    const std::int64_t layer = std::int64_t(o.key.k[2]) - 32768;
+    const std::int64_t layer = leaf_cell(o.key.k[2]);
     if (layer >= 1 && double(layer) < top)
       centres.push_back(pcl::PointXYZ{float(o.center.x), float(o.center.y), float(o.center.z)});
   });
@@ -470,7 +470,7 @@ std::size_t label_openings(SemiOcTree& tree, const std::vector<DetectedOpening>&
         if (!done.insert({key[0], key[1], key[2]}).second) continue;
         const auto oct = tree.find_octant(key);
         if (oct && oct->label() == Label::kOccupied) continue;
-        tree.set_label(key, tree.coarse_level(), label_of(o.kind));
+        tree.set_label(key, tree.leaf_level(), label_of(o.kind));
         ++labelled;
       }
   }

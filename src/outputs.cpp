@@ -25,7 +25,7 @@ std::unique_ptr<SemiOcTree> with_markers(const SemiOcTree& tree, const std::vect
         for (int dx = -1; dx <= 1; ++dx) {
           octomap::OcTreeKey key;
           if (out->key_of(Point3(c.x + dx * r, c.y + dy * r, c.z + dz * r), key))
-            out->set_label(key, out->coarse_level(), label);
+            out->set_label(key, out->leaf_level(), label);
         }
   };
   for (const Point3& s : scans) mark(s, Label::kScan);

@@ -179,10 +179,8 @@ namespace {
 std::size_t count_cells(const Cloud& cloud, double spacing) {
   PackedKeyMap<std::uint32_t> cells(cloud.size());
   const double inv = 1.0 / spacing;
-  auto cell = [inv](float v) {
-    return std::uint64_t(std::int64_t(std::floor(double(v) * inv)) & 0x1fffff);
-  };
-  for (const auto& q : cloud) cells.insert((cell(q.x) << 42) | (cell(q.y) << 21) | cell(q.z));
+  auto cell = [inv](float v) { return std::uint64_t(std::int64_t(std::floor(double(v) * inv))); };
+  for (const auto& q : cloud) cells.insert(pack_cell_parts(cell(q.x), cell(q.y), cell(q.z)));
   return cells.size();
 }
 

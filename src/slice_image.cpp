@@ -24,7 +24,7 @@ void write_slice_png(const SemiOcTree& tree, const std::string& path, const Slic
     throw std::invalid_argument("slice height out of range");
   // Extent of the coarse grid in xy (leaf cells), from the coarse voxels.
   long min_cell[2] = {1L << 20, 1L << 20}, max_cell[2] = {-(1L << 20), -(1L << 20)};
-  const long cells_per_coarse = 1L << tree.coarse_level();
+  const long cells_per_coarse = 1L << tree.leaf_level();
   tree.for_each_coarse([&](const CoarseIndex& c, SemiOcTreeNode*) {
     min_cell[0] = std::min(min_cell[0], long(c.x) * cells_per_coarse);
     min_cell[1] = std::min(min_cell[1], long(c.y) * cells_per_coarse);
@@ -49,10 +49,9 @@ void write_slice_png(const SemiOcTree& tree, const std::string& path, const Slic
   img.fill_rect(ox, oy, ox + map_w, oy + map_h, {235, 235, 235});
   const unsigned hz = hkey.k[2];
   tree.for_each_octant([&](const Octant& o) {
-    const unsigned span = 1u << (tree.coarse_level() - o.level);
+    const unsigned span = 1u << (tree.leaf_level() - o.level);
     if (!(o.key.k[2] <= hz && hz < o.key.k[2] + span)) return;  // does not cross the cut
-    const long cx = long(o.key.k[0]) - 32768 - min_cell[0],
-               cy = long(o.key.k[1]) - 32768 - min_cell[1];
+    const long cx = leaf_cell(o.key.k[0]) - min_cell[0], cy = leaf_cell(o.key.k[1]) - min_cell[1];
     const int x0 = ox + int(cx) * ppl, x1 = x0 + int(span) * ppl;
     const int y1 = oy + map_h - int(cy) * ppl, y0 = y1 - int(span) * ppl;
     const Rgb c = label_color(o.label());

@@ -1,20 +1,14 @@
 #include "semioctree/update.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <unordered_set>
 
 #include "semioctree/preprocess.h"
+#include "semioctree/timing.h"
 
 namespace semioctree {
-
-namespace {
-double since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-}  // namespace
 
 Cloud::Ptr within_limits(const Cloud& scan, const ScannerView& limits, std::size_t* dropped) {
   // Coordinates are floats: a return on a limit itself (the synthetic
@@ -40,7 +34,7 @@ Cloud::Ptr within_limits(const Cloud& scan, const ScannerView& limits, std::size
 }
 
 SurveyMap::SurveyMap(const SurveyMapParams& params) : params_(params), merged_(new Cloud) {
-  SemiOcTree::coarse_level_for(params.grid.leaf, params.grid.coarse);  // validates
+  SemiOcTree::leaf_level_for(params.grid.leaf, params.grid.coarse);  // validates
 }
 
 std::vector<ScannerView> SurveyMap::views() const {
@@ -74,8 +68,7 @@ void relabel(SemiOcTree& tree, const std::vector<LabelledOctant>& octants, Label
 }
 
 std::uint64_t pack_octant(const octomap::OcTreeKey& k, unsigned level, Label label) {
-  return (std::uint64_t(label) << 56) | (std::uint64_t(level) << 48) | (std::uint64_t(k[0]) << 32) |
-         (std::uint64_t(k[1]) << 16) | std::uint64_t(k[2]);
+  return (std::uint64_t(label) << 56) | pack_octant_key(k, level);
 }
 
 struct OpeningChange {
@@ -148,7 +141,7 @@ ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,
   ScanUpdateReport rep;
   rep.scan_index = scanners_.size();
   const bool first = !tree_;
-  auto t0 = std::chrono::steady_clock::now();
+  auto t0 = Clock::now();
   // The openings the map held before this scan (its points may fill some).
   const std::vector<LabelledOctant> openings_before =
       first ? std::vector<LabelledOctant>{} : octants_labelled(*tree_, kOpeningLabels);
@@ -168,9 +161,9 @@ ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,
   returns_.push_back(std::move(returns));
   *merged_ += points;
   if (params_.merged_spacing > 0) merged_ = decimate(*merged_, params_.merged_spacing);
-  rep.seconds_occupancy = since(t0);
+  rep.seconds_occupancy = seconds_since(t0);
 
-  t0 = std::chrono::steady_clock::now();
+  t0 = Clock::now();
   openings_ =
       detect_openings(*merged_, ceiling_, *tree_, scanners_, params_.openings, &rep.openings);
   // The map's doors and windows are the openings found now: earlier labels go
@@ -181,9 +174,9 @@ ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,
   const OpeningChange change = compare_openings(*tree_, openings_before);
   rep.opening_octants_dropped = change.dropped;
   rep.opening_leaves_added = change.added && !first;
-  rep.seconds_openings = since(t0);
+  rep.seconds_openings = seconds_since(t0);
 
-  t0 = std::chrono::steady_clock::now();
+  t0 = Clock::now();
   OcclusionParams op;
   op.threads = params_.threads;
   const std::vector<ScannerView> all = views();
@@ -205,7 +198,7 @@ ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,
       rep.through_openings = study_occlusion(*tree_, all, op);
     }
   }
-  rep.seconds_occlusion = since(t0);
+  rep.seconds_occlusion = seconds_since(t0);
   return rep;
 }
 

@@ -40,6 +40,7 @@
 #include "semioctree/openings.h"
 #include "semioctree/preprocess.h"
 #include "support/bench_common.h"
+#include "src/parallel_for.h"
 #include "support/lab_scan.h"
 
 using namespace semioctree;
@@ -144,8 +145,7 @@ int main(int argc, char** argv) {
                "fields are then those of an empty map); default: off");
   CLI11_PARSE(app, argc, argv);
   const bool with_homogeneous = !no_homogeneous;
-  const unsigned used_threads =
-      threads ? threads : std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
+  const unsigned used_threads = detail::thread_count(threads);  // as the scorer counts them
   const testing::LabScan lab = testing::scan_lab();
   PreprocessParams pp;
   pp.target_points = 400000;
@@ -223,7 +223,7 @@ int main(int argc, char** argv) {
   semi->for_each_octant([&](const Octant& oc) {
     if (oc.label() != Label::kOccluded) return;
     scorer.targets.push_back(oc.center);
-    scorer.weights.push_back(double(std::uint64_t(1) << (3 * (semi->coarse_level() - oc.level))));
+    scorer.weights.push_back(double(std::uint64_t(1) << (3 * (semi->leaf_level() - oc.level))));
   });
   std::vector<double> octo_scores(semi_sub.size(), 0);
   std::atomic<std::size_t> next{0}, octo_cast{0};

@@ -30,7 +30,7 @@ namespace {
 void occupy_box_surface(SemiOcTree& tree, double x0, double y0, double z0, double x1, double y1,
                         double z1) {
   const double r = tree.leaf_size();
-  const unsigned leaf = tree.coarse_level();
+  const unsigned leaf = tree.leaf_level();
   for (double x = x0; x < x1; x += r)
     for (double y = y0; y < y1; y += r)
       for (double z = z0; z < z1; z += r) {

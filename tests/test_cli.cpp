@@ -136,7 +136,7 @@ TEST(Cli, DiscretizeWritesEveryFile) {
     EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
   EXPECT_NE(r.all().find("preprocess:"), std::string::npos) << r.all();
   const auto tree = read_semioctree_file((dir / "out" / "semioctree.ot").string());
-  EXPECT_EQ(tree->coarse_level(), 3u);
+  EXPECT_EQ(tree->leaf_level(), 3u);
   std::ifstream js(dir / "out" / "stats.json");
   const auto j = nlohmann::json::parse(js);
   // The file is the map of stats.json plus the scan marker, 3×3×3 leaves around

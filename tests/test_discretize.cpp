@@ -67,12 +67,12 @@ TEST(Discretize, HomogeneousAndSemioctreeAgreeOnOccupiedLeaves) {
   for (const auto& p : *room) lifted.push_back(pcl::PointXYZ{p.x + 2.f, p.y + 1.5f, p.z + 1.5f});
   const auto semi = discretize(lifted, 2.45, {0.1, 0.8});
   const auto homo = discretize(lifted, 2.45, {0.1, 0.1});
-  EXPECT_EQ(homo->coarse_level(), 0u);
+  EXPECT_EQ(homo->leaf_level(), 0u);
   auto occupied = [](const SemiOcTree& t) {
     std::set<std::tuple<unsigned, unsigned, unsigned>> s;
     t.for_each_octant([&](const Octant& o) {
       if (o.label() == Label::kOccupied) {
-        EXPECT_EQ(o.level, t.coarse_level()) << "occupied above the leaf level";
+        EXPECT_EQ(o.level, t.leaf_level()) << "occupied above the leaf level";
         s.emplace(o.key.k[0], o.key.k[1], o.key.k[2]);
       }
     });

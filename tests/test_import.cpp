@@ -31,7 +31,7 @@ TEST(Import, SampleTreeThroughItsOccupancyMapKeepsEveryCell) {
     OccupancyImportReport rep;
     const auto tree = from_occupancy_octree(*map, 0.4, unobserved, &rep);
     EXPECT_EQ(tree->leaf_size(), 0.05);
-    EXPECT_EQ(tree->coarse_level(), 3u);
+    EXPECT_EQ(tree->leaf_level(), 3u);
     EXPECT_EQ(tree->coarse_count(), 12u);
     EXPECT_EQ(rep.coarse_voxels, 12u);
     EXPECT_EQ(rep.map_leaves, map->getNumLeafNodes());

@@ -167,7 +167,7 @@ TEST(Nbv, FloorLayerOfACoarseLeafIsDrivenOver) {
   auto leaf = [&](double x, double y, double z, Label l) {
     octomap::OcTreeKey k;
     ASSERT_TRUE(t.key_of({x, y, z}, k));
-    t.set_label(k, t.coarse_level(), l);
+    t.set_label(k, t.leaf_level(), l);
   };
   for (double x = 0.05; x < 4.8; x += 0.1)
     for (double y = 0.05; y < 4.8; y += 0.1) leaf(x, y, 0.05, Label::kOccupied);  // the floor

@@ -246,7 +246,7 @@ double reference_score(const SemiOcTree& t, const Point3& a, const ScannerView& 
   t.for_each_octant([&](const Octant& o) {
     if (o.label() != Label::kOccluded) return;
     if (const auto n = reference_line(t, a, o.center, lim))
-      sum += double(std::uint64_t(1) << (3 * (t.coarse_level() - o.level))) / (1.0 + *n);
+      sum += double(std::uint64_t(1) << (3 * (t.leaf_level() - o.level))) / (1.0 + *n);
   });
   return sum;
 }

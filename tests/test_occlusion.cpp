@@ -46,7 +46,7 @@ void label_door(SemiOcTree& tree, Label as = Label::kDoor) {
     for (double z = 0.025; z < 2.0; z += 0.05) {
       octomap::OcTreeKey k;
       tree.key_of({2.025, y, z}, k);
-      tree.set_label(k, tree.coarse_level(), as);
+      tree.set_label(k, tree.leaf_level(), as);
     }
 }
 
@@ -304,7 +304,7 @@ TEST(Occlusion, ScanFromADoorwayStillLooksThroughTheOtherDoors) {
       for (double z = 0.025; z < 2.0; z += 0.05) {
         octomap::OcTreeKey k;
         tree->key_of({x, y, z}, k);
-        tree->set_label(k, tree->coarse_level(), Label::kDoor);
+        tree->set_label(k, tree->leaf_level(), Label::kDoor);
       }
   study_occlusion(*tree, {ScannerView{Point3(2.15, 2.0, 1.2)}});
   EXPECT_EQ(label_at(*tree, Point3(1.0, 1.4, 1.0)), Label::kEmpty);  // its own room

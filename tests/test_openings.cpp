@@ -325,7 +325,7 @@ TEST(Openings, MapCeilingNeedsAFloorAndADenseLayerAboveTwoMetres) {
       for (double y = 0.025; y < side; y += 0.05) {
         octomap::OcTreeKey k;
         ASSERT_TRUE(t.key_of({x, y, z}, k));
-        t.set_label(k, t.coarse_level(), Label::kOccupied);
+        t.set_label(k, t.leaf_level(), Label::kOccupied);
       }
   };
   fill_layer(2.725, 3.0);  // a ceiling, but no floor: not levelled at z = 0
@@ -341,10 +341,10 @@ TEST(Openings, MapCeilingNeedsAFloorAndADenseLayerAboveTwoMetres) {
     for (double y = 0.025; y < 3.0; y += 0.05) {
       octomap::OcTreeKey k;
       ASSERT_TRUE(sparse.key_of({x, y, 0.025}, k));
-      sparse.set_label(k, sparse.coarse_level(), Label::kOccupied);
+      sparse.set_label(k, sparse.leaf_level(), Label::kOccupied);
       if (y < 0.5) {
         ASSERT_TRUE(sparse.key_of({x, y, 2.525}, k));
-        sparse.set_label(k, sparse.coarse_level(), Label::kOccupied);
+        sparse.set_label(k, sparse.leaf_level(), Label::kOccupied);
       }
     }
   EXPECT_FALSE(map_ceiling_height(sparse));  // 1/6 of the floor's leaves: not a ceiling

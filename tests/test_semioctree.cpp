@@ -79,10 +79,10 @@ TEST(SemiOcTreeNode, IsSixteenBytesAndKeepsLabel) {
 }
 
 TEST(SemiOcTree, ValidatesLeafAndCoarseSize) {
-  EXPECT_EQ(SemiOcTree(0.05, 0.8).coarse_level(), 4u);
+  EXPECT_EQ(SemiOcTree(0.05, 0.8).leaf_level(), 4u);
   EXPECT_EQ(SemiOcTree(0.05, 0.8).leaf_level(), 4u);  // the leaves' level, k
-  EXPECT_EQ(SemiOcTree(0.05, 0.05).coarse_level(), 0u);
-  EXPECT_EQ(SemiOcTree(0.1, 0.8).coarse_level(), 3u);
+  EXPECT_EQ(SemiOcTree(0.05, 0.05).leaf_level(), 0u);
+  EXPECT_EQ(SemiOcTree(0.1, 0.8).leaf_level(), 3u);
   try {
     SemiOcTree bad(0.05, 0.7);
     FAIL() << "0.7 is not 0.05 times a power of two";
@@ -121,14 +121,14 @@ TEST(SemiOcTree, CoarseGridIsAlignedToTheWorld) {
       // min-corner key, is 2^15 + i·2^k: the first leaf cell of the voxel.
       octomap::OcTreeKey key;
       ASSERT_TRUE(t.key_of(p, key));
-      const int cells = 1 << t.coarse_level();
+      const int cells = 1 << t.leaf_level();
       const octomap::OcTreeKey ck = t.coarse_key(c);
       for (int a = 0; a < 3; ++a) {
         const int ci = a == 0 ? c.x : (a == 1 ? c.y : c.z);
-        const int j = int(key.k[a]) - 32768;
+        const int j = int(leaf_cell(key.k[a]));
         const int floor_div = j >= 0 ? j / cells : -((-j + cells - 1) / cells);
         EXPECT_EQ(ci, floor_div) << "axis " << a << " key " << key.k[a];
-        EXPECT_EQ(int(ck.k[a]), 32768 + ci * cells) << "axis " << a;
+        EXPECT_EQ(int(ck.k[a]), kKeyOrigin + ci * cells) << "axis " << a;
         // The min-corner cell starts at iL.
         EXPECT_NEAR(t.keyToCoord(ck.k[a]) - 0.5 * leaf, ci * coarse, 1e-9) << "axis " << a;
       }
@@ -281,7 +281,7 @@ TEST(SemiOcTree, OtRoundTripIsLossless) {
   auto* back = dynamic_cast<SemiOcTree*>(read.get());
   ASSERT_NE(back, nullptr) << "AbstractOcTree::read must create a SemiOcTree";
   EXPECT_EQ(back->getResolution(), t.getResolution());  // exact, not 6 digits
-  EXPECT_EQ(back->coarse_level(), t.coarse_level());
+  EXPECT_EQ(back->leaf_level(), t.leaf_level());
   EXPECT_EQ(back->coarse_count(), t.coarse_count());
   EXPECT_EQ(back->size(), t.size());
   const auto original = octant_map(t);

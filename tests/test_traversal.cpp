@@ -148,7 +148,7 @@ TEST(Traversal, MatchesBruteForceAtFiveCentimetres) {
 
 TEST(Traversal, HomogeneousGridIsTheSameCodePath) {
   const auto tree = random_tree(0.1, 0, 3);
-  EXPECT_EQ(tree->coarse_level(), 0u);
+  EXPECT_EQ(tree->leaf_level(), 0u);
   expect_matches_reference(*tree, 13, 3000, 1.0);
 }
 
@@ -176,7 +176,7 @@ TEST(Traversal, GeometricallyCorrect) {
       const double size = tree->octant_size(s.level);
       double t0 = 0, t1 = 1;
       for (int ax = 0; ax < 3; ++ax) {
-        const double lo = (double(s.key.k[ax]) - 32768) * tree->leaf_size() - 1e-9;
+        const double lo = double(leaf_cell(s.key.k[ax])) * tree->leaf_size() - 1e-9;
         const double hi = lo + size + 2e-9;
         const double o = a[ax], d = b[ax] - a[ax];
         if (std::fabs(d) < 1e-15) {
@@ -201,7 +201,7 @@ TEST(Traversal, GeometricallyCorrect) {
         level = o->level;
         okey = o->key;
       } else {
-        const unsigned mask = ~((1u << tree->coarse_level()) - 1u);
+        const unsigned mask = ~((1u << tree->leaf_level()) - 1u);
         for (int ax = 0; ax < 3; ++ax) okey.k[ax] = octomap::key_type(key.k[ax] & mask);
       }
       // Sampled points can round into a neighbour when within an ulp of a face;
@@ -237,7 +237,7 @@ TEST(Traversal, StopsEarlyOnRequest) {
   for (int x = 0; x < 4; ++x) tree.create_coarse({x, 0, 0}, Label::kEmpty);
   octomap::OcTreeKey wall;
   ASSERT_TRUE(tree.key_of({1.62, 0.41, 0.41}, wall));
-  tree.set_label(wall, tree.coarse_level(), Label::kOccupied);
+  tree.set_label(wall, tree.leaf_level(), Label::kOccupied);
   std::vector<Label> seen;
   const auto end = tree.traverse({0.01, 0.41, 0.41}, {3.19, 0.41, 0.41}, [&](const RayStep& s) {
     seen.push_back(s.label());
@@ -342,7 +342,7 @@ TEST(Traversal, MarksStayValidWhenUnmarkedLeavesAreSplit) {
   // Split every unmarked non-occupied leaf once (what the occlusion study does).
   std::vector<Octant> leaves;
   tree->for_each_octant([&](const Octant& o) {
-    if (o.level < tree->coarse_level() && o.label() != Label::kOccupied) leaves.push_back(o);
+    if (o.level < tree->leaf_level() && o.label() != Label::kOccupied) leaves.push_back(o);
   });
   for (const Octant& o : leaves) tree->expandNode(const_cast<SemiOcTreeNode*>(o.node));
   // No new node carries the mark, and every marked node still holds an occupied leaf.

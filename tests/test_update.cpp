@@ -78,7 +78,7 @@ TEST(Update, SecondScanRefinesTheMapLikeARebuild) {
   map.tree().for_each_octant([&](const Octant& o) {
     EXPECT_NE(o.label(), Label::kUnknown);
     if (o.label() == Label::kOccupied) {
-      EXPECT_EQ(o.level, map.tree().coarse_level());
+      EXPECT_EQ(o.level, map.tree().leaf_level());
     }
   });
   EXPECT_EQ(map.scanners().size(), 2u);

@@ -93,7 +93,7 @@ extern "C" void semioctree_register_tree_types() {
 
 namespace semioctree {
 
-unsigned SemiOcTree::coarse_level_for(double leaf_size, double coarse_size) {
+unsigned SemiOcTree::leaf_level_for(double leaf_size, double coarse_size) {
   if (!(leaf_size > 0) || !std::isfinite(leaf_size))
     throw std::invalid_argument("leaf size must be a positive number of metres, got " +
                                 std::to_string(leaf_size));
@@ -101,34 +101,34 @@ unsigned SemiOcTree::coarse_level_for(double leaf_size, double coarse_size) {
     throw std::invalid_argument("coarse size must be a positive number of metres, got " +
                                 std::to_string(coarse_size));
   const double ratio = coarse_size / leaf_size;
-  for (unsigned k = 0; k <= kMaxCoarseLevel; ++k) {
+  for (unsigned k = 0; k <= kMaxLeafLevel; ++k) {
     if (std::fabs(ratio - double(1u << k)) <= 1e-6 * double(1u << k)) return k;
   }
   std::ostringstream msg;
   msg << "coarse size " << coarse_size << " m is not leaf size " << leaf_size
-      << " m times a power of two (2^0 .. 2^" << kMaxCoarseLevel << "); ratio is " << ratio;
+      << " m times a power of two (2^0 .. 2^" << kMaxLeafLevel << "); ratio is " << ratio;
   throw std::invalid_argument(msg.str());
 }
 
 SemiOcTree::SemiOcTree(double leaf_size, double coarse_size)
     : OccupancyOcTreeBase<SemiOcTreeNode>(leaf_size),
-      coarse_level_(coarse_level_for(leaf_size, coarse_size)) {
+      leaf_level_(leaf_level_for(leaf_size, coarse_size)) {
   semioctree_member_init_.ensureLinking();
 }
 
 SemiOcTree::SemiOcTree(double leaf_size)
-    : OccupancyOcTreeBase<SemiOcTreeNode>(leaf_size), coarse_level_(0) {
+    : OccupancyOcTreeBase<SemiOcTreeNode>(leaf_size), leaf_level_(0) {
   semioctree_member_init_.ensureLinking();
 }
 
 std::uint64_t SemiOcTree::pack(const octomap::OcTreeKey& c) {
-  return (std::uint64_t(c.k[0]) << 32) | (std::uint64_t(c.k[1]) << 16) | std::uint64_t(c.k[2]);
+  return pack_octant_key(c);
 }
 
 CoarseIndex SemiOcTree::coarse_index(const octomap::OcTreeKey& key) const {
-  const int off = int(kKeyOrigin >> coarse_level_);
-  return {int(key.k[0] >> coarse_level_) - off, int(key.k[1] >> coarse_level_) - off,
-          int(key.k[2] >> coarse_level_) - off};
+  const int off = int(kKeyOrigin >> leaf_level_);
+  return {int(key.k[0] >> leaf_level_) - off, int(key.k[1] >> leaf_level_) - off,
+          int(key.k[2] >> leaf_level_) - off};
 }
 
 bool SemiOcTree::key_of(const Point3& p, octomap::OcTreeKey& key) const {
@@ -143,14 +143,14 @@ bool SemiOcTree::coarse_index_of(const Point3& p, CoarseIndex& out) const {
 }
 
 octomap::OcTreeKey SemiOcTree::coarse_key(const CoarseIndex& c) const {
-  const int off = int(kKeyOrigin >> coarse_level_);
-  const int lim = int(1u << (kTreeDepth - coarse_level_));
+  const int off = int(kKeyOrigin >> leaf_level_);
+  const int lim = int(1u << (kTreeDepth - leaf_level_));
   const int v[3] = {c.x + off, c.y + off, c.z + off};
   octomap::OcTreeKey key;
   for (int i = 0; i < 3; ++i) {
     if (v[i] < 0 || v[i] >= lim)
       throw std::out_of_range("coarse index outside OctoMap's key range");
-    key.k[i] = static_cast<octomap::key_type>(unsigned(v[i]) << coarse_level_);
+    key.k[i] = static_cast<octomap::key_type>(unsigned(v[i]) << leaf_level_);
   }
   return key;
 }
@@ -161,13 +161,13 @@ Point3 SemiOcTree::coarse_min_corner(const CoarseIndex& c) const {
 }
 
 SemiOcTreeNode* SemiOcTree::find_coarse(const CoarseIndex& c) const {
-  const int off = int(kKeyOrigin >> coarse_level_);
-  const int lim = int(1u << (kTreeDepth - coarse_level_));
+  const int off = int(kKeyOrigin >> leaf_level_);
+  const int lim = int(1u << (kTreeDepth - leaf_level_));
   const int v[3] = {c.x + off, c.y + off, c.z + off};
   for (int x : v)
     if (x < 0 || x >= lim) return nullptr;
   return coarse_.value_or(
-      (std::uint64_t(v[0]) << 32) | (std::uint64_t(v[1]) << 16) | std::uint64_t(v[2]), nullptr);
+      pack_key_parts(std::uint64_t(v[0]), std::uint64_t(v[1]), std::uint64_t(v[2])), nullptr);
 }
 
 SemiOcTreeNode* SemiOcTree::create_coarse(const CoarseIndex& c, Label label) {
@@ -186,10 +186,9 @@ SemiOcTreeNode* SemiOcTree::create_coarse(const CoarseIndex& c, Label label) {
   node->set_label(label);
   node->setLogOdds(log_odds_for(label));
   node->flags_ |= SemiOcTreeNode::kCoarseRoot;
-  coarse_.insert_or_assign(
-      pack(octomap::OcTreeKey(key.k[0] >> coarse_level_, key.k[1] >> coarse_level_,
-                              key.k[2] >> coarse_level_)),
-      node);
+  coarse_.insert_or_assign(pack(octomap::OcTreeKey(key.k[0] >> leaf_level_, key.k[1] >> leaf_level_,
+                                                   key.k[2] >> leaf_level_)),
+                           node);
   size_changed = true;
   return node;
 }
@@ -208,7 +207,7 @@ float SemiOcTree::log_odds_for(Label label) const {
 Octant SemiOcTree::make_octant(const octomap::OcTreeKey& key, unsigned level,
                                const SemiOcTreeNode* node) const {
   Octant o;
-  const unsigned shift = coarse_level_ - level;
+  const unsigned shift = leaf_level_ - level;
   const unsigned mask = ~((1u << shift) - 1u);
   for (int i = 0; i < 3; ++i) o.key.k[i] = static_cast<octomap::key_type>(key.k[i] & mask);
   o.level = level;
@@ -225,8 +224,8 @@ std::optional<Octant> SemiOcTree::find_octant(const octomap::OcTreeKey& key) con
   const SemiOcTreeNode* node = find_coarse(coarse_index(key));
   if (!node) return std::nullopt;
   unsigned level = 0;
-  while (level < coarse_level_ && nodeHasChildren(node)) {
-    node = getNodeChild(node, octomap::computeChildIdx(key, int(coarse_level_ - 1 - level)));
+  while (level < leaf_level_ && nodeHasChildren(node)) {
+    node = getNodeChild(node, octomap::computeChildIdx(key, int(leaf_level_ - 1 - level)));
     ++level;
   }
   return make_octant(key, level, node);
@@ -239,17 +238,17 @@ std::optional<Octant> SemiOcTree::find_octant(const Point3& p) const {
 }
 
 SemiOcTreeNode* SemiOcTree::touch_octant(const octomap::OcTreeKey& key, unsigned level) {
-  if (level > coarse_level_) throw std::out_of_range("octant level below the leaf level");
+  if (level > leaf_level_) throw std::out_of_range("octant level below the leaf level");
   SemiOcTreeNode* node = create_coarse(coarse_index(key));
   for (unsigned l = 0; l < level; ++l) {
     if (!nodeHasChildren(node)) expandNode(node);
-    node = getNodeChild(node, octomap::computeChildIdx(key, int(coarse_level_ - 1 - l)));
+    node = getNodeChild(node, octomap::computeChildIdx(key, int(leaf_level_ - 1 - l)));
   }
   return node;
 }
 
 void SemiOcTree::split(const octomap::OcTreeKey& key, unsigned level) {
-  if (level >= coarse_level_) throw std::logic_error("cannot split an octant at the leaf level");
+  if (level >= leaf_level_) throw std::logic_error("cannot split an octant at the leaf level");
   SemiOcTreeNode* node = touch_octant(key, level);
   if (!nodeHasChildren(node)) expandNode(node);
 }
@@ -297,9 +296,9 @@ void SemiOcTree::mark_subtrees(std::uint32_t labels) {
 
 OctantStatistics SemiOcTree::statistics() const {
   OctantStatistics st;
-  st.coarse_level = coarse_level_;
+  st.leaf_level = leaf_level_;
   st.leaf_size = resolution;
-  st.count.assign(coarse_level_ + 1, {});
+  st.count.assign(leaf_level_ + 1, {});
   st.coarse_voxels = coarse_.size();
   for_each_octant([&](const Octant& o) {
     const int l = static_cast<int>(o.label());
@@ -445,7 +444,7 @@ void SemiOcTree::compact() {
   // The grid down to the coarse voxels first, then each coarse voxel's own
   // octree in one block: a ray crossing a split voxel finds its nodes together.
   const std::vector<Pair> coarse = copy_levels({{root, fresh.root}}, coarse_depth());
-  for (const Pair& c : coarse) copy_levels({c}, coarse_level_);
+  for (const Pair& c : coarse) copy_levels({c}, leaf_level_);
   std::swap(root, fresh.root);
   std::swap(tree_size, fresh.tree_size);
   size_changed = true;
@@ -458,8 +457,8 @@ void SemiOcTree::mark_coarse_recurs(SemiOcTreeNode* node, unsigned depth, octoma
   if (depth == coarse_depth()) {
     node->flags_ |= SemiOcTreeNode::kCoarseRoot;
     coarse_.insert_or_assign(
-        pack(octomap::OcTreeKey(key.k[0] >> coarse_level_, key.k[1] >> coarse_level_,
-                                key.k[2] >> coarse_level_)),
+        pack(octomap::OcTreeKey(key.k[0] >> leaf_level_, key.k[1] >> leaf_level_,
+                                key.k[2] >> leaf_level_)),
         node);
     return;
   }
@@ -484,7 +483,7 @@ constexpr std::uint32_t kFormatVersion = 1;
 struct PayloadHeader {
   char magic[8];
   std::uint32_t version;
-  std::uint32_t coarse_level;
+  std::uint32_t leaf_level;
   double resolution;
   std::uint64_t node_count;
   std::uint64_t payload_bytes;
@@ -501,7 +500,7 @@ std::ostream& SemiOcTree::writeData(std::ostream& s) const {
   PayloadHeader h{};
   std::memcpy(h.magic, kMagic, sizeof(kMagic));
   h.version = kFormatVersion;
-  h.coarse_level = coarse_level_;
+  h.leaf_level = leaf_level_;
   h.resolution = resolution;
   h.node_count = root ? calcNumNodes() : 0;
   h.payload_bytes = payload.size();
@@ -520,9 +519,9 @@ std::istream& SemiOcTree::readData(std::istream& s) {
   if (h.version != kFormatVersion)
     throw FileFormatError("SemiOcTree data version " + std::to_string(h.version) +
                           " is not supported (expected 1)");
-  if (h.coarse_level > kMaxCoarseLevel)
-    throw FileFormatError("SemiOcTree coarse level " + std::to_string(h.coarse_level) +
-                          " is out of range (0.." + std::to_string(kMaxCoarseLevel) + ")");
+  if (h.leaf_level > kMaxLeafLevel)
+    throw FileFormatError("SemiOcTree leaf level " + std::to_string(h.leaf_level) +
+                          " is out of range (0.." + std::to_string(kMaxLeafLevel) + ")");
   if (!(h.resolution > 0) || !std::isfinite(h.resolution))
     throw FileFormatError("SemiOcTree resolution is not a positive number");
   const std::uint64_t per_node = SemiOcTreeNode::kSerializedBytes + 1;
@@ -533,7 +532,7 @@ std::istream& SemiOcTree::readData(std::istream& s) {
   if (fnv1a64(payload.data(), payload.size()) != h.payload_hash)
     throw FileFormatError("SemiOcTree data is corrupted (checksum mismatch)");
 
-  const unsigned cd = kTreeDepth - h.coarse_level;
+  const unsigned cd = kTreeDepth - h.leaf_level;
   const auto check_node = [&](const char* data, unsigned depth, bool has_children) -> const char* {
     float v;
     std::memcpy(&v, data, 4);
@@ -547,7 +546,7 @@ std::istream& SemiOcTree::readData(std::istream& s) {
   if (counted != h.node_count) throw FileFormatError("SemiOcTree node count mismatch");
 
   setResolution(h.resolution);
-  coarse_level_ = h.coarse_level;
+  leaf_level_ = h.leaf_level;
   if (h.node_count > 0) {
     std::istringstream nodes(payload);
     OccupancyOcTreeBase<SemiOcTreeNode>::readData(nodes);

@@ -178,18 +178,19 @@ TriangleMesh read_octomap_occupied(const std::string& path) {
   }
   if (cell_list.empty()) throw std::runtime_error(path + ": the octree has no occupied voxels");
 
+  constexpr double kKeyOrigin = 32768;  // OctoMap's key of coordinate 0 (depth 16)
   TriangleMesh mesh;
   std::unordered_map<std::uint64_t, int> corner_ids;
   // Cell c (shifted by +1 above so that c − 1 never underflows) spans
-  // [(c − 1 − 32768)·res, (c − 32768)·res) on each axis.
+  // [(c − 1 − kKeyOrigin)·res, (c − kKeyOrigin)·res) on each axis.
   auto corner = [&](std::uint32_t x, std::uint32_t y, std::uint32_t z) {
     const std::uint64_t key = detail::grid_cell_key(x, y, z);
     auto found = corner_ids.find(key);
     if (found != corner_ids.end()) return found->second;
     const int id = static_cast<int>(mesh.vertices.size());
-    mesh.vertices.emplace_back((static_cast<double>(x) - 1 - 32768) * res,
-                               (static_cast<double>(y) - 1 - 32768) * res,
-                               (static_cast<double>(z) - 1 - 32768) * res);
+    mesh.vertices.emplace_back((static_cast<double>(x) - 1 - kKeyOrigin) * res,
+                               (static_cast<double>(y) - 1 - kKeyOrigin) * res,
+                               (static_cast<double>(z) - 1 - kKeyOrigin) * res);
     corner_ids.emplace(key, id);
     return id;
   };

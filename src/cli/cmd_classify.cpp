@@ -45,7 +45,7 @@ void add_classify_command(CLI::App& app) {
   cmd->add_option("--slice-height", o->slice_height,
                   "height of the slice image in metres above the floor (default: scanner height)");
   cmd->callback([o] {
-    SemiOcTree::coarse_level_for(o->disc.leaf, o->disc.coarse);
+    SemiOcTree::leaf_level_for(o->disc.leaf, o->disc.coarse);
     const PreparedCloud cloud = prepare(o->source, "classify", &o->limits);
     auto t0 = Clock::now();
     const auto tree = discretize(*cloud.pre.cloud, cloud.pre.ceiling_height, o->disc);

@@ -39,7 +39,7 @@ void add_discretize_command(CLI::App& app) {
   cmd->add_option("--slice-height", o->slice_height,
                   "height of the slice image in metres above the floor (default: scanner height)");
   cmd->callback([o] {
-    SemiOcTree::coarse_level_for(o->disc.leaf, o->disc.coarse);  // fail before reading anything
+    SemiOcTree::leaf_level_for(o->disc.leaf, o->disc.coarse);  // fail before reading anything
     const PreparedCloud cloud = prepare(o->source, "discretize", &o->limits);
     const auto t0 = Clock::now();
     DiscretizeReport rep;

@@ -17,14 +17,14 @@ namespace {
 void print_semioctree(const SemiOcTree& t) {
   const OctantStatistics st = t.statistics();
   std::cout << "leaf size:      " << t.leaf_size() << " m\n"
-            << "coarse size:    " << t.coarse_size() << " m (k = " << t.coarse_level() << ")\n"
+            << "coarse size:    " << t.coarse_size() << " m (k = " << t.leaf_level() << ")\n"
             << "coarse voxels:  " << st.coarse_voxels << "\n"
             << "octants:        " << st.total() << "\n\n";
   std::cout << std::left << std::setw(8) << "level" << std::setw(10) << "size[m]";
   for (int l = 0; l < kLabelCount; ++l) std::cout << std::right << std::setw(10) << kLabelNames[l];
   std::cout << std::setw(11) << "total"
             << "\n";
-  for (unsigned lv = 0; lv <= t.coarse_level(); ++lv) {
+  for (unsigned lv = 0; lv <= t.leaf_level(); ++lv) {
     std::cout << std::left << std::setw(8) << lv << std::setw(10) << t.octant_size(lv);
     for (int l = 0; l < kLabelCount; ++l)
       std::cout << std::right << std::setw(10) << st.count[lv][l];

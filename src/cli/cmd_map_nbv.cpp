@@ -161,7 +161,7 @@ void run_map_nbv(const MapNbvOptions& o) {
     const auto t0 = std::chrono::steady_clock::now();
     const double res = occupancy->getResolution();
     try {
-      SemiOcTree::coarse_level_for(res, o.coarse);
+      SemiOcTree::leaf_level_for(res, o.coarse);
     } catch (const std::invalid_argument&) {
       throw std::invalid_argument("--coarse " + std::to_string(o.coarse) +
                                   " is not the map's resolution (" + std::to_string(res) +

@@ -51,7 +51,7 @@ void add_planning_options(CLI::App& cmd, PlanningOptions& o) {
 void apply_planning_options(const PlanningOptions& o, SurveyParams& p, bool homogeneous) {
   // L = r·2^k, or a clear error (the homogeneous grid's region snaps to L too);
   // the homogeneous grid has one level.
-  const unsigned semioctree_k = SemiOcTree::coarse_level_for(o.leaf, o.coarse);
+  const unsigned semioctree_k = SemiOcTree::leaf_level_for(o.leaf, o.coarse);
   const unsigned k = homogeneous ? 0 : semioctree_k;
   if (o.level > int(k))
     throw std::invalid_argument("--level " + std::to_string(o.level) +

@@ -19,7 +19,7 @@ using nlohmann::json;
 json octants_json(const SemiOcTree& tree, json& volume_percent_out) {
   const OctantStatistics st = tree.statistics();
   json by_level = json::array(), by_label = json::object();
-  for (unsigned l = 0; l <= tree.coarse_level(); ++l) by_level.push_back(st.at_level(l));
+  for (unsigned l = 0; l <= tree.leaf_level(); ++l) by_level.push_back(st.at_level(l));
   for (int l = 1; l < kLabelCount; ++l)
     by_label[std::string(label_name(Label(l)))] = st.with_label(Label(l));
   json pct = json::object();

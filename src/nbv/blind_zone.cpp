@@ -19,7 +19,7 @@ bool blind_from(const Point3& s, const ScannerView& lim, const Point3& p) {
 
 }  // namespace
 
-bool blind_octant(const Octant& o, unsigned coarse_level, const std::vector<Point3>& scans,
+bool blind_octant(const Octant& o, unsigned leaf_level, const std::vector<Point3>& scans,
                   const ScannerView& lim) {
   auto blind = [&](const Point3& p) {
     for (const Point3& s : scans)
@@ -27,12 +27,12 @@ bool blind_octant(const Octant& o, unsigned coarse_level, const std::vector<Poin
     return false;
   };
   if (!blind(o.center)) return false;
-  if (o.level >= coarse_level) return true;  // a leaf is judged by its centre
+  if (o.level >= leaf_level) return true;  // a leaf is judged by its centre
   // A larger octant by the centres of its corner leaves, so that an octant
   // merged from blind leaves (a pruned map) stays blind. Exact when one scan's
   // ball or cone holds all of them (both are convex); across the two, a leaf
   // in between might not be blind: rare, and only near a past scan position.
-  const double leaf = o.size / double(1u << (coarse_level - o.level));
+  const double leaf = o.size / double(1u << (leaf_level - o.level));
   const double h = 0.5 * (o.size - leaf);
   for (int k = 0; k < 8; ++k) {
     const Point3 q(o.center.x + ((k & 1) ? h : -h), o.center.y + ((k & 2) ? h : -h),

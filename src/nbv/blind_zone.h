@@ -10,10 +10,10 @@
 namespace semioctree::nbv_detail {
 
 // Whether all sample points of `o` (its centre; above the leaf level
-// `coarse_level` also the centres of its 8 corner leaves) lie in the blind zone
+// `leaf_level` also the centres of its 8 corner leaves) lie in the blind zone
 // (closer than the minimum range or below the minimum elevation of `limits`) of
 // some scanner in `scans`.
-bool blind_octant(const Octant& o, unsigned coarse_level, const std::vector<Point3>& scans,
+bool blind_octant(const Octant& o, unsigned leaf_level, const std::vector<Point3>& scans,
                   const ScannerView& limits);
 
 }  // namespace semioctree::nbv_detail

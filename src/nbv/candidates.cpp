@@ -22,7 +22,7 @@ using nbv_detail::flood_fill_4;
 using nbv_detail::free_space;
 
 // The 2-D grid of leaf cells over the map's coarse columns, with a border of
-// one cell; cell (x, y) is leaf column (x + x0, y + y0) (key − 32768).
+// one cell; cell (x, y) is leaf column (x + x0, y + y0) (key − kKeyOrigin).
 struct Plane {
   CoarseIndex lo, hi;  // the coarse columns (coarse_columns)
   std::int64_t x0 = 0, y0 = 0;
@@ -34,7 +34,7 @@ struct Plane {
 };
 
 Plane plane_over(const SemiOcTree& tree) {
-  const std::int64_t span = std::int64_t(1) << tree.coarse_level();
+  const std::int64_t span = std::int64_t(1) << tree.leaf_level();
   const std::pair<CoarseIndex, CoarseIndex> columns = coarse_columns(tree);
   const CoarseIndex &lo = columns.first, &hi = columns.second;
   Plane p;
@@ -54,7 +54,7 @@ std::vector<std::uint8_t> obstacle_columns(const SemiOcTree& tree, const Plane& 
                                            const std::vector<Point3>& past_scans,
                                            const NbvParams& params, CandidateReport& rep) {
   const double r = tree.leaf_size();
-  const unsigned k = tree.coarse_level();
+  const unsigned k = tree.leaf_level();
   const std::int64_t span = std::int64_t(1) << k;
   const int nx = plane.nx, ny = plane.ny;
   std::vector<std::uint8_t> obstacle(plane.cells(), 0);
@@ -79,7 +79,7 @@ std::vector<std::uint8_t> obstacle_columns(const SemiOcTree& tree, const Plane& 
           mark(cx * span, cy * span, span);
   tree.for_each_octant([&](const Octant& o) {
     const std::int64_t size = std::int64_t(1) << (k - o.level);
-    const std::int64_t z = std::int64_t(o.key.k[2]) - 32768;
+    const std::int64_t z = leaf_cell(o.key.k[2]);
     if (z >= layers || double(z + size) <= clearance) return;
     const Label l = o.label();
     if (l == Label::kOccluded) {
@@ -90,7 +90,7 @@ std::vector<std::uint8_t> obstacle_columns(const SemiOcTree& tree, const Plane& 
     } else if (l != Label::kOccupied && l != Label::kUnknown) {
       return;
     }
-    mark(std::int64_t(o.key.k[0]) - 32768, std::int64_t(o.key.k[1]) - 32768, size);
+    mark(leaf_cell(o.key.k[0]), leaf_cell(o.key.k[1]), size);
   });
   return obstacle;
 }
@@ -123,8 +123,8 @@ std::vector<std::uint8_t> reachable_cells(const SemiOcTree& tree, const Plane& p
                                           CandidateReport& rep) {
   octomap::OcTreeKey rk;
   if (!tree.key_of(robot_position, rk)) return std::vector<std::uint8_t>(clear.size(), 0);
-  const std::int64_t rx = std::int64_t(rk.k[0]) - 32768 - plane.x0;
-  const std::int64_t ry = std::int64_t(rk.k[1]) - 32768 - plane.y0;
+  const std::int64_t rx = leaf_cell(rk.k[0]) - plane.x0;
+  const std::int64_t ry = leaf_cell(rk.k[1]) - plane.y0;
   if (!(rx > 0 && ry > 0 && rx < plane.nx - 1 && ry < plane.ny - 1))
     return std::vector<std::uint8_t>(clear.size(), 0);
   rep.robot_in_map = true;
@@ -165,8 +165,8 @@ std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry&
     octomap::OcTreeKey ak;
     if (!tree.key_of(Point3(params.grid_anchor->x, params.grid_anchor->y, 0.0), ak))
       throw std::invalid_argument("NbvParams: the candidate grid's anchor is beyond the key range");
-    off_x = ((std::int64_t(ak.k[0]) - 32768) % m + m) % m;
-    off_y = ((std::int64_t(ak.k[1]) - 32768) % m + m) % m;
+    off_x = ((leaf_cell(ak.k[0])) % m + m) % m;
+    off_y = ((leaf_cell(ak.k[1])) % m + m) % m;
   }
   auto first_on_grid = [&](std::int64_t v, std::int64_t off) {  // smallest g >= v, g ≡ off
     std::int64_t d = v - off;

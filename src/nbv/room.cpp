@@ -30,10 +30,10 @@ std::optional<RoomBox> room_box(const SemiOcTree& tree, const std::vector<Point3
                                 double height, double floor_z, double ceiling_z) {
   if (tree.coarse_count() == 0 || !(ceiling_z > floor_z)) return std::nullopt;
   const double r = tree.leaf_size();
-  const unsigned k = tree.coarse_level();
+  const unsigned k = tree.leaf_level();
   const std::int64_t span = std::int64_t(1) << k;
   // Leaf cells of the plane over the map's coarse columns (1: free); cell (x, y)
-  // is key (x + x0, y + y0) − 32768.
+  // is key (x + x0, y + y0) − kKeyOrigin.
   const std::pair<CoarseIndex, CoarseIndex> columns = coarse_columns(tree);
   const CoarseIndex &lo = columns.first, &hi = columns.second;
   const std::int64_t x0 = std::int64_t(lo.x) * span, y0 = std::int64_t(lo.y) * span;
@@ -45,8 +45,8 @@ std::optional<RoomBox> room_box(const SemiOcTree& tree, const std::vector<Point3
     const double h = 0.5 * o.size;
     if (!free_space(o.label()) || height < o.center.z - h || height >= o.center.z + h) return;
     const std::int64_t size = std::int64_t(1) << (k - o.level);
-    const std::int64_t cx = std::int64_t(o.key.k[0]) - 32768 - x0;
-    const std::int64_t cy = std::int64_t(o.key.k[1]) - 32768 - y0;
+    const std::int64_t cx = leaf_cell(o.key.k[0]) - x0;
+    const std::int64_t cy = leaf_cell(o.key.k[1]) - y0;
     for (std::int64_t y = cy; y < cy + size; ++y)
       for (std::int64_t x = cx; x < cx + size; ++x) free_cell[idx(x, y)] = 1;
   });
@@ -59,8 +59,8 @@ std::optional<RoomBox> room_box(const SemiOcTree& tree, const std::vector<Point3
   for (const Point3& s : scanners) {
     octomap::OcTreeKey key;
     if (!tree.key_of(Point3(s.x, s.y, height), key)) continue;
-    const std::int64_t sx = std::int64_t(key.k[0]) - 32768 - x0;
-    const std::int64_t sy = std::int64_t(key.k[1]) - 32768 - y0;
+    const std::int64_t sx = leaf_cell(key.k[0]) - x0;
+    const std::int64_t sy = leaf_cell(key.k[1]) - y0;
     for (std::int64_t y = sy - reach; y <= sy + reach; ++y)
       for (std::int64_t x = sx - reach; x <= sx + reach; ++x) {
         if (x < 0 || y < 0 || x >= nx || y >= ny || !free_cell[idx(x, y)]) continue;

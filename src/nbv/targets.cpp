@@ -9,18 +9,18 @@
 namespace semioctree::nbv_detail {
 
 unsigned resolve_level(const SemiOcTree& tree, const NbvParams& p) {
-  if (p.method == 1) return tree.coarse_level();
-  if (p.method == 3) return tree.coarse_level();
+  if (p.method == 1) return tree.leaf_level();
+  if (p.method == 3) return tree.leaf_level();
   if (p.method != 2) throw std::invalid_argument("NbvParams::method must be 1, 2 or 3");
-  if (p.level == NbvParams::kLeafLevel) return tree.coarse_level();
-  if (p.level > tree.coarse_level())
+  if (p.level == NbvParams::kLeafLevel) return tree.leaf_level();
+  if (p.level > tree.leaf_level())
     throw std::invalid_argument("NbvParams::level is finer than the tree's leaf level");
   return p.level;
 }
 
 std::vector<Target> method1_targets(const SemiOcTree& tree, const std::optional<RoomBox>& room) {
   std::vector<Target> out;
-  const unsigned k = tree.coarse_level();
+  const unsigned k = tree.leaf_level();
   const double leaf_volume = std::pow(tree.leaf_size(), 3);
   tree.for_each_octant([&](const Octant& o) {
     if (o.label() != Label::kOccluded) return;
@@ -64,12 +64,12 @@ std::vector<Target> method3_targets(const SemiOcTree& tree) {
 
 std::vector<Target> method2_targets(const SemiOcTree& tree, unsigned level) {
   std::vector<Target> out;
-  const unsigned k = tree.coarse_level();
+  const unsigned k = tree.leaf_level();
   const std::int64_t c = std::int64_t(1) << (k - level);
   const double r = tree.leaf_size();
   auto cell_of = [&](const octomap::OcTreeKey& key, std::int64_t cell[3]) {
     for (int i = 0; i < 3; ++i) {
-      const std::int64_t v = std::int64_t(key.k[i]) - 32768;
+      const std::int64_t v = leaf_cell(key.k[i]);
       cell[i] = v >= 0 ? (v / c) * c : -((-v + c - 1) / c) * c;
     }
   };
@@ -110,7 +110,7 @@ std::vector<Target> method2_targets(const SemiOcTree& tree, unsigned level) {
     if (o.label() != Label::kOccluded) return;
     const std::int64_t sub = std::int64_t(1) << (level - o.level);
     std::int64_t base[3];
-    for (int i = 0; i < 3; ++i) base[i] = std::int64_t(o.key.k[i]) - 32768;
+    for (int i = 0; i < 3; ++i) base[i] = leaf_cell(o.key.k[i]);
     for (std::int64_t z = 0; z < sub; ++z)
       for (std::int64_t y = 0; y < sub; ++y)
         for (std::int64_t x = 0; x < sub; ++x) {

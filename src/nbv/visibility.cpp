@@ -39,7 +39,7 @@ namespace {
 class CellCounter {
  public:
   CellCounter(const SemiOcTree& tree, unsigned level, const Point3& a, const Point3& b)
-      : k_(tree.coarse_level()), level_(level), c_(std::int64_t(1) << (k_ - level)) {
+      : k_(tree.leaf_level()), level_(level), c_(std::int64_t(1) << (k_ - level)) {
     const double inv = 1.0 / tree.getResolution();  // == OctoMap's resolution_factor
     const double P[2][3] = {{a.x * inv, a.y * inv, a.z * inv}, {b.x * inv, b.y * inv, b.z * inv}};
     for (int i = 0; i < 3; ++i) {
@@ -65,7 +65,7 @@ class CellCounter {
     for (int i = 0; i < 3; ++i) {
       left[i] = 0;
       if (dir_[i] == 0) continue;
-      const std::int64_t base = std::int64_t(key.k[i]) - 32768;
+      const std::int64_t base = leaf_cell(key.k[i]);
       // Interior planes base + j c (0 < j < m/c) with s < p <= e (up) or e < p <= s (down).
       std::int64_t lo = base + c_, hi = base + m - c_;
       if (dir_[i] > 0) {
@@ -109,7 +109,7 @@ class CellCounter {
 
   // Minimum-corner leaf cell of the level-ℓ cell holding the octant at `key`.
   void cell_of(const octomap::OcTreeKey& key, std::int64_t out[3]) const {
-    for (int i = 0; i < 3; ++i) out[i] = floor_to(std::int64_t(key.k[i]) - 32768, 0);
+    for (int i = 0; i < 3; ++i) out[i] = floor_to(leaf_cell(key.k[i]), 0);
   }
   unsigned level() const { return level_; }
 

@@ -29,7 +29,7 @@ struct Los {
 class BlockerCache {
  public:
   explicit BlockerCache(const SemiOcTree& tree)
-      : inv_(1.0 / tree.getResolution()), k_(tree.coarse_level()), bins_(6 * kN * kN) {}
+      : inv_(1.0 / tree.getResolution()), k_(tree.leaf_level()), bins_(6 * kN * kN) {}
   // A new scanner position: forget the blockers. (Keeping those found from
   // the previous, neighbouring position would be as exact, but measured no
   // faster: the per-target memo already catches them.)
@@ -52,19 +52,17 @@ class BlockerCache {
     return false;
   }
   // A blocker packed in 64 bits (0: none), for the per-target memo.
+  // (Bit 56 set: never 0.)
   static std::uint64_t pack(const RayStep& s) {
-    return (std::uint64_t(1) << 56) | (std::uint64_t(s.level) << 48) |
-           (std::uint64_t(s.key.k[0]) << 32) | (std::uint64_t(s.key.k[1]) << 16) |
-           std::uint64_t(s.key.k[2]);
+    return (std::uint64_t(1) << 56) | pack_octant_key(s.key, s.level);
   }
   // Does it pass through this packed blocker?
   bool passes_through(std::uint64_t packed) const {
     if (!packed) return false;
+    const octomap::OcTreeKey key = unpack_octant_key(packed);
     Entry e;
-    e.key[0] = static_cast<std::uint16_t>(packed >> 32);
-    e.key[1] = static_cast<std::uint16_t>(packed >> 16);
-    e.key[2] = static_cast<std::uint16_t>(packed);
-    e.level = static_cast<std::uint8_t>(packed >> 48);
+    for (int i = 0; i < 3; ++i) e.key[i] = key.k[i];
+    e.level = static_cast<std::uint8_t>(unpack_octant_level(packed));
     return passes_through(e);
   }
   void add(const RayStep& s) {
@@ -109,14 +107,14 @@ class BlockerCache {
     // The scanner's own octant never blocks: reject a box holding the start.
     bool holds_start = true;
     for (int i = 0; i < 3 && holds_start; ++i) {
-      const double lo = double(std::int64_t(e.key[i]) - 32768);
+      const double lo = double(std::int64_t(e.key[i]) - kKeyOrigin);
       holds_start = A_[i] >= lo && A_[i] <= lo + size;
     }
     if (holds_start) return false;
     const double m = size - 2 * kShrink;
     double t0 = 0, t1 = 1;
     for (int i = 0; i < 3; ++i) {
-      const double lo = double(std::int64_t(e.key[i]) - 32768) + kShrink, hi = lo + m;
+      const double lo = double(std::int64_t(e.key[i]) - kKeyOrigin) + kShrink, hi = lo + m;
       if (D_[i] == 0) {
         if (!(A_[i] > lo && A_[i] < hi)) return false;
         continue;

@@ -20,7 +20,7 @@ int main(int argc, char** argv) {
   if (argc > 1 && !tree.write(argv[1])) return 4;
   std::unique_ptr<octomap::AbstractOcTree> back(octomap::AbstractOcTree::read(buf));
   auto* semi = dynamic_cast<semioctree::SemiOcTree*>(back.get());
-  if (!semi || semi->coarse_level() != 4) return 2;
+  if (!semi || semi->leaf_level() != 4) return 2;
   int steps = 0;
   semi->traverse({0.1, 0.1, 0.1}, {0.7, 0.7, 0.7},
                  [&](const semioctree::RayStep&) { return ++steps > 0; });

@@ -28,7 +28,7 @@ struct Map {
   void set(double x, double y, double z, unsigned level, Label l) {
     t.set_label(key(x, y, z), level, l);
   }
-  void leaf(double x, double y, double z, Label l) { set(x, y, z, t.coarse_level(), l); }
+  void leaf(double x, double y, double z, Label l) { set(x, y, z, t.leaf_level(), l); }
   // Every leaf whose centre lies in [lo, hi).
   void leaves(const Point3& lo, const Point3& hi, Label l) {
     for (double x = lo.x + kLeaf / 2; x < hi.x; x += kLeaf)

@@ -69,8 +69,9 @@ inline std::vector<RefStep> reference_traversal(const SemiOcTree& tree, const Po
         const Key enter = std::max({ex, ey, ez});
         const Key leave = std::min({lx, ly, lz});
         if (!(enter < leave)) continue;
-        const octomap::OcTreeKey cell(octomap::key_type(cx + 32768), octomap::key_type(cy + 32768),
-                                      octomap::key_type(cz + 32768));
+        const octomap::OcTreeKey cell(octomap::key_type(cx + kKeyOrigin),
+                                      octomap::key_type(cy + kKeyOrigin),
+                                      octomap::key_type(cz + kKeyOrigin));
         unsigned level = 0;
         octomap::OcTreeKey okey;
         bool has_node = false;
@@ -79,7 +80,7 @@ inline std::vector<RefStep> reference_traversal(const SemiOcTree& tree, const Po
           okey = o->key;
           has_node = true;
         } else {
-          const unsigned mask = ~((1u << tree.coarse_level()) - 1u);
+          const unsigned mask = ~((1u << tree.leaf_level()) - 1u);
           for (int i = 0; i < 3; ++i) okey.k[i] = octomap::key_type(cell.k[i] & mask);
         }
         const auto id =

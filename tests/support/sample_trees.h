@@ -24,7 +24,7 @@ inline std::unique_ptr<SemiOcTree> sample_tree() {
     t.key_of({x, y, z}, k);
     return k;
   };
-  const unsigned leaf = t.coarse_level();
+  const unsigned leaf = t.leaf_level();
   for (double y = 0.025; y < 0.8; y += 0.05)
     for (double z = 0.025; z < 0.8; z += 0.05)
       t.set_label(key(0.025, y, z), leaf, Label::kOccupied);

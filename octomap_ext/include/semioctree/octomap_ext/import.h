@@ -30,7 +30,7 @@ struct OccupancyImportReport {
 // for study_occlusion to classify from known scanner positions (OcclusionScope
 // kUnknown), or kOccluded to take all of it as hidden. Sibling octants left with one
 // label are merged. Throws std::invalid_argument if coarse_size is not the map's
-// resolution times a power of two (up to 2^kMaxCoarseLevel).
+// resolution times a power of two (up to 2^kMaxLeafLevel).
 std::unique_ptr<SemiOcTree> from_occupancy_octree(const octomap::OcTree& map, double coarse_size,
                                                   Label unobserved = Label::kUnknown,
                                                   OccupancyImportReport* report = nullptr);

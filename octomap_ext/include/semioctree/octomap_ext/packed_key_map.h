@@ -14,6 +14,16 @@
 
 namespace semioctree {
 
+// Three 21-bit parts (each taken modulo 2^21) as one key of a PackedKeyMap: x in bits
+// 42-62, y in 21-41, z in 0-20 (bit 63 stays clear, so no key is kNoKey); and back.
+inline std::uint64_t pack_cell_parts(std::uint64_t x, std::uint64_t y, std::uint64_t z) {
+  constexpr std::uint64_t kMask = (std::uint64_t(1) << 21) - 1;
+  return ((x & kMask) << 42) | ((y & kMask) << 21) | (z & kMask);
+}
+inline std::uint64_t unpack_cell_part(std::uint64_t packed, int axis) {
+  return (packed >> (21 * (2 - axis))) & ((std::uint64_t(1) << 21) - 1);
+}
+
 // kMaxLoadPercent: the table doubles before it is fuller than this. Lookups
 // that mostly miss (the traversal's, outside the map) want it low.
 template <class Value, unsigned kMaxLoadPercent = 75>

@@ -28,6 +28,29 @@ namespace semioctree {
 // of depth 16): the leaf cell [i r, (i+1) r) has key i + kKeyOrigin.
 constexpr std::int64_t kKeyOrigin = 32768;
 
+// The leaf cell index i of a key part (the cell [i r, (i+1) r)).
+inline std::int64_t leaf_cell(octomap::key_type key_part) {
+  return std::int64_t(key_part) - kKeyOrigin;
+}
+
+// Three 16-bit key parts and a level (0-255) as one 64-bit value: level in bits 48-55,
+// x in 32-47, y in 16-31, z in 0-15. Distinct octants give distinct values.
+inline std::uint64_t pack_key_parts(std::uint64_t x, std::uint64_t y, std::uint64_t z,
+                                    unsigned level = 0) {
+  return (std::uint64_t(level) << 48) | (x << 32) | (y << 16) | z;
+}
+inline std::uint64_t pack_octant_key(const octomap::OcTreeKey& key, unsigned level = 0) {
+  return pack_key_parts(key.k[0], key.k[1], key.k[2], level);
+}
+// The key and the level pack_octant_key packed.
+inline octomap::OcTreeKey unpack_octant_key(std::uint64_t packed) {
+  return octomap::OcTreeKey(octomap::key_type(packed >> 32), octomap::key_type(packed >> 16),
+                            octomap::key_type(packed));
+}
+inline unsigned unpack_octant_level(std::uint64_t packed) {
+  return unsigned(packed >> 48) & 0xffu;
+}
+
 // A point in world coordinates (metres), in double precision: OctoMap's point3d
 // is float, which puts points on cell boundaries into the wrong cell.
 struct Point3 {
@@ -57,7 +80,7 @@ struct Octant {
 
 // Octants per level and label, and volume per label.
 struct OctantStatistics {
-  unsigned coarse_level = 0;
+  unsigned leaf_level = 0;
   double leaf_size = 0;
   std::vector<std::array<std::uint64_t, kLabelCount>> count;  // [level][label]
   std::array<double, kLabelCount> volume{};                   // m³ per label
@@ -93,7 +116,7 @@ void register_tree_types();  // below, with its documentation
 class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
  public:
   static constexpr unsigned kTreeDepth = 16;
-  static constexpr unsigned kMaxCoarseLevel = 12;
+  static constexpr unsigned kMaxLeafLevel = 12;
   static_assert(kKeyOrigin == std::int64_t(1) << (kTreeDepth - 1), "OctoMap's key of 0");
 
   // Leaf size r and coarse size L; L must be r·2^k for an integer 0 ≤ k ≤ 12,
@@ -108,24 +131,22 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
   SemiOcTree& operator=(const SemiOcTree&) = delete;
 
   // k such that coarse = leaf·2^k; throws std::invalid_argument otherwise.
-  static unsigned coarse_level_for(double leaf_size, double coarse_size);
+  static unsigned leaf_level_for(double leaf_size, double coarse_size);
 
   SemiOcTree* create() const override { return new SemiOcTree(resolution); }
   std::string getTreeType() const override { return "SemiOcTree"; }
 
   double leaf_size() const { return resolution; }
-  double coarse_size() const { return resolution * double(1u << coarse_level_); }
+  double coarse_size() const { return resolution * double(1u << leaf_level_); }
   // Level of the leaf octants, k (coarse = leaf·2^k): levels run from 0 (coarse
   // voxel) to leaf_level() (leaf).
-  unsigned leaf_level() const { return coarse_level_; }
-  // Deprecated: the same as leaf_level() (the name says the opposite; it goes).
-  unsigned coarse_level() const { return coarse_level_; }
-  unsigned coarse_depth() const { return kTreeDepth - coarse_level_; }
+  unsigned leaf_level() const { return leaf_level_; }
+  unsigned coarse_depth() const { return kTreeDepth - leaf_level_; }
   // Edge of an octant of `level` (0 = coarse voxel ... leaf_level() = leaf);
   // std::out_of_range for a level finer than the leaf.
   double octant_size(unsigned level) const {
-    if (level > coarse_level_) throw std::out_of_range("octant level finer than the leaf");
-    return resolution * double(1u << (coarse_level_ - level));
+    if (level > leaf_level_) throw std::out_of_range("octant level finer than the leaf");
+    return resolution * double(1u << (leaf_level_ - level));
   }
 
   // --- coarse grid ------------------------------------------------------------
@@ -263,7 +284,7 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
       delete;
 
   // --- file format ------------------------------------------------------------
-  // .ot payload: a small header (magic, coarse level, exact resolution, node
+  // .ot payload: a small header (magic, leaf level k, exact resolution, node
   // count, byte count, FNV-1a hash) and OctoMap's node stream. readData throws
   // FileFormatError on anything malformed and leaves the tree empty.
   std::istream& readData(std::istream& s) override;
@@ -295,7 +316,7 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
   void mark_coarse_recurs(SemiOcTreeNode* node, unsigned depth, octomap::OcTreeKey key);
   void delete_children(SemiOcTreeNode* node);
 
-  unsigned coarse_level_ = 0;
+  unsigned leaf_level_ = 0;
   // Packed (key >> k) of each coarse voxel → its node.
   PackedKeyMap<SemiOcTreeNode*, 50> coarse_;  // packed coarse index → node
 };

@@ -81,7 +81,7 @@ bool SemiOcTree::traverse_children(const SegmentFrame& f, const SemiOcTreeNode* 
                                    int p_in, double t_out, int p_out, Visitor& visit) const {
   // The segment is inside `node` for events in [in, out). Its children are
   // entered where the segment crosses the node's three mid-planes.
-  const std::int64_t half = std::int64_t(1) << (coarse_level_ - level - 1);
+  const std::int64_t half = std::int64_t(1) << (leaf_level_ - level - 1);
   unsigned child = 0;    // bit i: upper half along axis i
   unsigned pending = 0;  // bit i: mid-plane i is crossed after `in`, before `out`
   double tm[3] = {0, 0, 0};
@@ -126,7 +126,7 @@ bool SemiOcTree::traverse_children(const SegmentFrame& f, const SemiOcTreeNode* 
 #pragma GCC unroll 3
     for (int i = 0; i < 3; ++i) child_base[i] = base[i] + ((child >> i) & 1u ? half : 0);
     const SemiOcTreeNode* c = nodeChildExists(node, child) ? getNodeChild(node, child) : nullptr;
-    const bool split = c && level + 1 < coarse_level_ && nodeHasChildren(c);
+    const bool split = c && level + 1 < leaf_level_ && nodeHasChildren(c);
     if (split && (!kMarkedOnly || c->has_flag(SemiOcTreeNode::kMarked))) {
       if (!traverse_children<kMarkedOnly>(f, c, level + 1, child_base, t_cur, p_cur, t_next, p_next,
                                           visit))
@@ -175,7 +175,7 @@ TraversalEnd SemiOcTree::traverse_impl(const Point3& a, const Point3& b, Visitor
     f.invD[i] = f.dir[i] != 0 ? 1.0 / (P[1][i] - P[0][i]) : 0.0;
   }
   constexpr double kInf = std::numeric_limits<double>::infinity();
-  const unsigned k = coarse_level_;
+  const unsigned k = leaf_level_;
   const std::int64_t span = std::int64_t(1)
                             << k;  // leaf cells per coarse voxel (no << on negatives)
   // Coarse-level DDA: the coarse cell and the next coarse plane crossing per axis.
@@ -212,9 +212,7 @@ TraversalEnd SemiOcTree::traverse_impl(const Point3& a, const Point3& b, Visitor
     }
     // O(1) access to the coarse voxel through the hashed grid.
     const SemiOcTreeNode* node =
-        coarse_.value_or((std::uint64_t(key.k[0] >> k) << 32) |
-                             (std::uint64_t(key.k[1] >> k) << 16) | std::uint64_t(key.k[2] >> k),
-                         nullptr);
+        coarse_.value_or(pack_key_parts(key.k[0] >> k, key.k[1] >> k, key.k[2] >> k), nullptr);
     const bool split = node && k > 0 && nodeHasChildren(node);
     if (split && (!kMarkedOnly || node->has_flag(SemiOcTreeNode::kMarked))) {
       if (!traverse_children<kMarkedOnly>(f, node, 0, base, t_in, p_in, t_out, p_out, visit))
