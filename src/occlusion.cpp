@@ -8,6 +8,7 @@
 #include <unordered_set>
 
 #include "parallel_for.h"
+#include "scanner_limits.h"
 #include "semioctree/octomap_ext/packed_key_map.h"
 
 namespace semioctree {
@@ -206,18 +207,12 @@ DoorSet own_door(const SemiOcTree& tree, const Point3& c) {
 // segment needs no trigonometry, and the door the view stands in (if any).
 struct ViewLimits {
   const ScannerView* view;
-  double min_range2, max_range2, sin_min, sin_max;
+  detail::ScannerLimits range_and_elevation;
   DoorSet own_door;  // empty: the view stands in no door
 };
 
 ViewLimits limits_of(const SemiOcTree& tree, const ScannerView& v) {
-  auto sine = [](double deg) { return std::sin(std::clamp(deg, -90.0, 90.0) * M_PI / 180.0); };
-  return {&v,
-          v.min_range * v.min_range,
-          v.max_range * v.max_range,
-          sine(v.elevation_min_deg),
-          sine(v.elevation_max_deg),
-          own_door(tree, v.position)};
+  return {&v, detail::ScannerLimits(v), own_door(tree, v.position)};
 }
 
 // Occupied octants entered at the very end of a segment only touch its end
@@ -230,10 +225,7 @@ template <bool kMarked>
 Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, const Point3& p) {
   const Point3& o = lim.view->position;
   const double dx = p.x - o.x, dy = p.y - o.y, dz = p.z - o.z;
-  const double range2 = dx * dx + dy * dy + dz * dz;
-  if (range2 < lim.min_range2 || range2 > lim.max_range2) return Visibility::kHidden;
-  const double range = std::sqrt(range2);
-  if (dz < lim.sin_min * range || dz > lim.sin_max * range) return Visibility::kHidden;
+  if (!lim.range_and_elevation.in_view(o, p)) return Visibility::kHidden;
   if (lim.view->returns && !lim.view->returns->has(dx, dy, dz)) return Visibility::kHidden;
   bool through_opening = false, blocked = false;
   auto visit = [&](const RayStep& s) {

@@ -39,8 +39,9 @@
 #include "semioctree/octomap_ext/export.h"
 #include "semioctree/openings.h"
 #include "semioctree/preprocess.h"
-#include "support/bench_common.h"
 #include "src/parallel_for.h"
+#include "src/scanner_limits.h"
+#include "support/bench_common.h"
 #include "support/lab_scan.h"
 
 using namespace semioctree;
@@ -77,16 +78,14 @@ struct CastRayScorer {
   ScannerView limits;
 
   double score(const Point3& a, octomap::KeyRay& ray, std::size_t& cast) const {
-    const double s_min = std::sin(limits.elevation_min_deg * M_PI / 180.0);
-    const double s_max = std::sin(limits.elevation_max_deg * M_PI / 180.0);
+    const detail::ScannerLimits in_limits(limits);  // the scorer's own test of the limits
     const octomap::point3d origin{float(a.x), float(a.y), float(a.z)};
     double sum = 0;
     for (std::size_t i = 0; i < targets.size(); ++i) {
       const Point3& b = targets[i];
+      if (!in_limits.in_view(a, b)) continue;
       const double dx = b.x - a.x, dy = b.y - a.y, dz = b.z - a.z;
       const double range = std::sqrt(dx * dx + dy * dy + dz * dz);
-      if (range < limits.min_range || range > limits.max_range || range == 0) continue;
-      if (dz / range < s_min || dz / range > s_max) continue;
       ++cast;
       const octomap::point3d dir{float(dx), float(dy), float(dz)};
       octomap::point3d hit;

@@ -152,7 +152,7 @@ namespace semioctree {
 namespace {
 
 TEST(Discretize, RealScanGivesAPlausibleMapAndSlice) {
-  const auto scans = read_scans(std::string(SEMIOCTREE_SHARED_DIR) + "/data/real/room_scan1.pcd");
+  const auto scans = read_scans(std::string(SEMIOCTREE_SOURCE_DIR) + "/tests/data/room_scan1.pcd");
   const PreprocessResult pre = preprocess(*scans[0].points);
   const auto t = discretize(*pre.cloud, pre.ceiling_height, {0.05, 0.8});
   const auto st = t->statistics();

@@ -464,7 +464,7 @@ namespace semioctree {
 namespace {
 
 TEST(Occlusion, RealScanClassificationIsPlausible) {
-  const auto scans = read_scans(std::string(SEMIOCTREE_SHARED_DIR) + "/data/real/room_scan1.pcd");
+  const auto scans = read_scans(std::string(SEMIOCTREE_SOURCE_DIR) + "/tests/data/room_scan1.pcd");
   const PreprocessResult pre = preprocess(*scans[0].points);
   const auto tree = discretize(*pre.cloud, pre.ceiling_height, {0.1, 0.8});
   const Eigen::Vector3d o = pre.transform * Eigen::Vector3d::Zero();  // the scanner

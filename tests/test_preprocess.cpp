@@ -117,7 +117,7 @@ TEST(Preprocess, ClearErrors) {
 }
 
 TEST(Preprocess, RealScanFloorCeilingAndLevel) {
-  const auto scans = read_scans(std::string(SEMIOCTREE_SHARED_DIR) + "/data/real/room_scan1.pcd");
+  const auto scans = read_scans(std::string(SEMIOCTREE_SOURCE_DIR) + "/tests/data/room_scan1.pcd");
   ASSERT_EQ(scans.size(), 1u);
   const PreprocessResult r = preprocess(*scans[0].points);
   EXPECT_GT(r.floor.plane_inliers, 1000u);

@@ -135,7 +135,7 @@ TEST(ScanIo, PosesAndErrors) {
 // Point by point against PCL's own loader: the valid points in file order,
 // the NaN/Inf ones dropped and counted.
 TEST(ScanIo, ReadsTheRealScan) {
-  const std::string path = std::string(SEMIOCTREE_SHARED_DIR) + "/data/real/room_scan1.pcd";
+  const std::string path = std::string(SEMIOCTREE_SOURCE_DIR) + "/tests/data/room_scan1.pcd";
   const auto scans = read_scans(path);
   ASSERT_EQ(scans.size(), 1u);
   EXPECT_EQ(scans[0].points->size() + scans[0].invalid_dropped, 112586u);
@@ -173,7 +173,7 @@ namespace {
 // Truncated clouds are an error naming the file, never a crash.
 TEST(ScanIo, TruncatedFilesAreRejected) {
   const auto dir = testing::temp_dir("trunc-cloud");
-  const std::string real = std::string(SEMIOCTREE_SHARED_DIR) + "/data/real/room_scan1.pcd";
+  const std::string real = std::string(SEMIOCTREE_SOURCE_DIR) + "/tests/data/room_scan1.pcd";
   Cloud c;
   for (int i = 0; i < 2000; ++i) c.push_back(pcl::PointXYZ{float(i), float(i % 7), float(i % 3)});
   pcl::io::savePCDFileBinary((dir / "b.pcd").string(), c);

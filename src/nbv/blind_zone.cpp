@@ -5,25 +5,11 @@
 
 namespace semioctree::nbv_detail {
 
-namespace {
-
-// In the blind zone of the scanner at `s`: closer than its minimum range or
-// below its minimum elevation.
-bool blind_from(const Point3& s, const ScannerView& lim, const Point3& p) {
-  const double dx = p.x - s.x, dy = p.y - s.y, dz = p.z - s.z;
-  const double range = std::sqrt(dx * dx + dy * dy + dz * dz);
-  if (range < lim.min_range) return true;
-  const double elevation = std::asin(std::clamp(dz / range, -1.0, 1.0)) * 180.0 / M_PI;
-  return elevation < lim.elevation_min_deg;
-}
-
-}  // namespace
-
 bool blind_octant(const Octant& o, unsigned leaf_level, const std::vector<Point3>& scans,
-                  const ScannerView& lim) {
+                  const detail::ScannerLimits& limits) {
   auto blind = [&](const Point3& p) {
     for (const Point3& s : scans)
-      if (blind_from(s, lim, p)) return true;
+      if (limits.in_blind_zone(s, p)) return true;
     return false;
   };
   if (!blind(o.center)) return false;

@@ -4,7 +4,7 @@
 
 #include <vector>
 
-#include "semioctree/occlusion.h"
+#include "../scanner_limits.h"
 #include "semioctree/octomap_ext/semioctree.h"
 
 namespace semioctree::nbv_detail {
@@ -14,6 +14,6 @@ namespace semioctree::nbv_detail {
 // (closer than the minimum range or below the minimum elevation of `limits`) of
 // some scanner in `scans`.
 bool blind_octant(const Octant& o, unsigned leaf_level, const std::vector<Point3>& scans,
-                  const ScannerView& limits);
+                  const detail::ScannerLimits& limits);
 
 }  // namespace semioctree::nbv_detail

@@ -77,13 +77,14 @@ std::vector<std::uint8_t> obstacle_columns(const SemiOcTree& tree, const Plane& 
       for (std::int64_t cz = 0; cz <= (layers - 1) >> k; ++cz)
         if (double((cz + 1) * span) > clearance && !tree.find_coarse({cx, cy, int(cz)}))
           mark(cx * span, cy * span, span);
+  const detail::ScannerLimits limits(params.limits);
   tree.for_each_octant([&](const Octant& o) {
     const std::int64_t size = std::int64_t(1) << (k - o.level);
     const std::int64_t z = leaf_cell(o.key.k[2]);
     if (z >= layers || double(z + size) <= clearance) return;
     const Label l = o.label();
     if (l == Label::kOccluded) {
-      if (params.blind_zone_is_free && blind_octant(o, k, past_scans, params.limits)) {
+      if (params.blind_zone_is_free && blind_octant(o, k, past_scans, limits)) {
         ++rep.blind_octants_freed;
         return;
       }

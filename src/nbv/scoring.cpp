@@ -6,7 +6,7 @@
 #include <cstdint>
 
 #include "../parallel_for.h"
-#include "scanner_limits.h"
+#include "../scanner_limits.h"
 #include "semioctree/timing.h"
 #include "targets.h"
 #include "visibility.h"
@@ -16,6 +16,7 @@ namespace semioctree {
 namespace {
 
 using detail::parallel_for;
+using detail::ScannerLimits;
 using detail::thread_count;
 using nbv_detail::BlockerCache;
 using nbv_detail::facing_area;
@@ -24,7 +25,6 @@ using nbv_detail::los_cells;
 using nbv_detail::los_octants;
 using nbv_detail::method1_targets;
 using nbv_detail::resolve_level;
-using nbv_detail::ScannerLimits;
 using nbv_detail::Target;
 using nbv_detail::targets_for;
 

@@ -1,5 +1,5 @@
-// Internal: the scanner's range and elevation limits as a test on a segment,
-// without a square root or trigonometry per segment.
+// Internal: the scanner's range and elevation limits as a test on a segment, without a
+// square root or trigonometry per segment; the occlusion study and the NBV share it.
 #pragma once
 
 #include <algorithm>
@@ -7,7 +7,7 @@
 
 #include "semioctree/occlusion.h"
 
-namespace semioctree::nbv_detail {
+namespace semioctree::detail {
 
 struct ScannerLimits {
   double min_range2, max_range2, sin_min, sin_max;
@@ -23,6 +23,13 @@ struct ScannerLimits {
     if (r2 < min_range2 || r2 > max_range2 || r2 == 0) return false;
     return at_least(dz, sin_min, r2) && at_least(-dz, -sin_max, r2);
   }
+  // b in the blind zone of a scanner at a: nearer than the minimum range, or below the
+  // lowest elevation.
+  bool in_blind_zone(const Point3& a, const Point3& b) const {
+    const double dx = b.x - a.x, dy = b.y - a.y, dz = b.z - a.z;
+    const double r2 = dx * dx + dy * dy + dz * dz;
+    return r2 < min_range2 || !at_least(dz, sin_min, r2);
+  }
   // dz >= s * sqrt(r2)?
   static bool at_least(double dz, double s, double r2) {
     if (s <= 0) return dz >= 0 || dz * dz <= s * s * r2;
@@ -33,4 +40,4 @@ struct ScannerLimits {
   static constexpr double kDeg = M_PI / 180.0;
 };
 
-}  // namespace semioctree::nbv_detail
+}  // namespace semioctree::detail
