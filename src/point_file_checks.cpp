@@ -347,11 +347,28 @@ void check_pcd_ascii(const std::string& path, std::istream& in, const PcdHeader&
   if (seen < h.points)
     throw ScanReadError(path + ": PCD file is truncated (" + std::to_string(seen) + " of " +
                         std::to_string(h.points) + " points)");
+  // PCL stops after POINTS rows: a further row of numbers is a point it would
+  // drop silently. Other text after the data (a note) is left alone, as PCL does.
+  std::string line;
+  for (int c = sb->sbumpc();; c = sb->sbumpc()) {
+    if (c != EOF && c != '\n') {
+      if (line.size() < 4096) line += char(c);
+      continue;
+    }
+    const std::vector<std::string> values = split_blanks(line);
+    if (!values.empty() && std::all_of(values.begin(), values.end(), is_number))
+      throw ScanReadError(path + ":" + std::to_string(lineno) + ": PCD POINTS (" +
+                          std::to_string(h.points) +
+                          ") is less than the file's data rows: one more row, " + excerpt(line));
+    if (c == EOF) return;
+    line.clear();
+    ++lineno;
+  }
 }
 
 }  // namespace
 
-void check_pcd_file(const std::string& path) {
+std::string check_pcd_file(const std::string& path) {
   const PcdHeader h = parse_pcd_header(path);
   const std::uint64_t available = h.file_size - std::min(h.file_size, h.data_offset);
   std::ifstream f(path, std::ios::binary);
@@ -367,20 +384,37 @@ void check_pcd_file(const std::string& path) {
           " points need at least " + std::to_string(need) + " bytes of ASCII data, the file has " +
           std::to_string(available));
     check_pcd_ascii(path, f, h);
-    return;
+    return "ascii";
   }
   if (pcd_entry_after_data(f)) throw ScanReadError(path + ": PCD header entry after the DATA line");
   if (h.data_type == 1 && available < bytes)
     throw ScanReadError(path + ": PCD file is truncated or its POINTS is wrong: " +
                         std::to_string(h.points) + " points need " + std::to_string(bytes) +
                         " data bytes, the file has " + std::to_string(available));
+  // PCL reads POINTS rows and ignores the rest: a whole row more is a point dropped.
+  if (h.data_type == 1 && available - bytes >= h.point_step)
+    throw ScanReadError(
+        path + ": PCD POINTS is less than the file's data rows: " + std::to_string(h.points) +
+        " points of " + std::to_string(h.point_step) + " bytes take " + std::to_string(bytes) +
+        " data bytes, the file has " + std::to_string(available) + " (" +
+        std::to_string(available / h.point_step) + " rows)");
   if (h.data_type == 2) {  // binary_compressed: two uint32 sizes, then the compressed block
     f.clear();
     f.seekg(std::streamoff(h.data_offset));
     std::uint32_t sizes[2] = {0, 0};
     if (!f.read(reinterpret_cast<char*>(sizes), sizeof(sizes)) ||
-        available < 8 + std::uint64_t(sizes[0]) || sizes[1] != bytes)
-      throw ScanReadError(path + ": PCD file is truncated or corrupted (compressed block)");
+        available < 8 + std::uint64_t(sizes[0]))
+      throw ScanReadError(path + ": binary_compressed data is truncated: the compressed block " +
+                          (available < 8
+                               ? std::string("has no size")
+                               : "of " + std::to_string(sizes[0]) + " bytes needs " +
+                                     std::to_string(8 + std::uint64_t(sizes[0])) +
+                                     " data bytes, the file has " + std::to_string(available)));
+    if (sizes[1] != bytes)
+      throw ScanReadError(path + ": binary_compressed data is corrupt: its block unpacks to " +
+                          std::to_string(sizes[1]) + " bytes, POINTS " + std::to_string(h.points) +
+                          " of " + std::to_string(h.point_step) + " bytes need " +
+                          std::to_string(bytes));
     // LZF's longest back-reference, 3 bytes, expands to 264: no block grows
     // more than 88 times. PCL allocates the uncompressed size before checking.
     if (bytes > 88 * std::uint64_t(sizes[0]))
@@ -388,7 +422,9 @@ void check_pcd_file(const std::string& path) {
           path + ": PCD file is corrupted or its POINTS is wrong: " + std::to_string(sizes[0]) +
           " compressed bytes cannot hold " + std::to_string(h.points) + " points (" +
           std::to_string(bytes) + " bytes)");
+    return "binary_compressed";
   }
+  return "binary";
 }
 
 namespace {
@@ -521,6 +557,33 @@ void check_ply_file(const std::string& path) {
                         "the elements (" + claimed + ") need at least " + std::to_string(need) +
                         (ascii ? " bytes of ASCII data" : " data bytes") + ", the file has " +
                         std::to_string(available));
+  if (!ascii) return;
+  // ASCII: one line per row, elements in header order. Count the non-empty lines.
+  std::ifstream f(path, std::ios::binary);
+  f.seekg(std::streamoff(h.data_offset));
+  std::uint64_t lines = 0;
+  bool blank = true;
+  char buf[1 << 16];
+  while (f.read(buf, sizeof buf) || f.gcount() > 0) {
+    for (std::streamsize i = 0; i < f.gcount(); ++i) {
+      if (buf[i] == '\n') {
+        lines += !blank;
+        blank = true;
+      } else if (!std::isspace(static_cast<unsigned char>(buf[i]))) {
+        blank = false;
+      }
+    }
+  }
+  lines += !blank;
+  std::uint64_t before = 0;
+  for (const Element& e : elements) {
+    if (lines < before + e.count)
+      throw ScanReadError(path + ": ascii PLY ends after " + std::to_string(lines - before) +
+                          " of " + std::to_string(e.count) + " " +
+                          (e.name == "vertex" ? std::string("vertices") : e.name + " rows") +
+                          " (truncated, or its element counts are wrong)");
+    before += e.count;
+  }
 }
 
 }  // namespace semioctree::detail

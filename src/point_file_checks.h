@@ -12,8 +12,9 @@ namespace semioctree::detail {
 // PCL indexes points with a signed 32-bit int.
 constexpr std::uint64_t kMaxFilePoints = 2147483647;
 
-// Throw ScanReadError naming the file and what is wrong with it.
-void check_pcd_file(const std::string& path);
+// Throw ScanReadError naming the file and what is wrong with it. check_pcd_file
+// returns the DATA line's format ("ascii", "binary", "binary_compressed").
+std::string check_pcd_file(const std::string& path);
 void check_ply_file(const std::string& path);
 
 }  // namespace semioctree::detail

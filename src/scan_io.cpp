@@ -45,6 +45,34 @@ std::size_t drop_invalid(Cloud& cloud) {
   return before - cloud.size();
 }
 
+std::string number_text(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+// Empty when `m` (scanner → survey) is a rigid transform whose position lies
+// within kMaxPoseCoordinate; else what is wrong with it.
+std::string pose_problem(const Eigen::Matrix4d& m) {
+  if (!m.allFinite()) return "is not finite (NaN or Inf)";
+  const Eigen::Vector3d t = m.block<3, 1>(0, 3);
+  if (t.cwiseAbs().maxCoeff() > kMaxPoseCoordinate)
+    return "puts the scanner at (" + number_text(t.x()) + ", " + number_text(t.y()) + ", " +
+           number_text(t.z()) + "), beyond ±" + number_text(kMaxPoseCoordinate) + " m";
+  const Eigen::Matrix3d r = m.block<3, 3>(0, 0);
+  const double off = (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (off > kRotationTolerance)
+    return "is not rigid: its rotation part is not orthonormal (axis lengths " +
+           number_text(r.col(0).norm()) + ", " + number_text(r.col(1).norm()) + ", " +
+           number_text(r.col(2).norm()) + "; RᵀR differs from the identity by " + number_text(off) +
+           ", more than " + number_text(kRotationTolerance) + ")";
+  if (r.determinant() < 0)
+    return "is not rigid: its rotation part is a reflection (determinant -1)";
+  if ((m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > kRotationTolerance)
+    return "is not rigid: it is a projection, not a rotation and translation";
+  return {};
+}
+
 void require_file(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw ScanReadError(path + ": no such file");
@@ -52,8 +80,9 @@ void require_file(const std::string& path) {
 
 Scan read_pcl(const std::string& path, bool pcd) {
   require_file(path);
+  std::string data = "data";
   if (pcd)
-    detail::check_pcd_file(path);
+    data = detail::check_pcd_file(path) + " data";
   else
     detail::check_ply_file(path);
   Scan scan;
@@ -76,8 +105,11 @@ Scan read_pcl(const std::string& path, bool pcd) {
       rc = pcl::PLYReader().read(path, blob, origin, orientation, version);
     pcl::console::setVerbosityLevel(saved);
   }
+  // The header and sizes were checked above: what PCL cannot read is the data.
   if (rc < 0)
-    throw ScanReadError(path + ": not a readable " + (pcd ? "PCD" : "PLY") + " point cloud");
+    throw ScanReadError(
+        path + ": not a readable " + (pcd ? "PCD" : "PLY") + " point cloud: its " + data + " is " +
+        (data == "binary_compressed data" ? "corrupt (LZF decompression failed)" : "malformed"));
   // A PLY camera element sets the cloud's size from its data, after the
   // header: a size beyond the data read makes PCL's conversion read past it.
   const std::uint64_t cells = std::uint64_t(blob.width) * blob.height;
@@ -97,6 +129,9 @@ Scan read_pcl(const std::string& path, bool pcd) {
     throw ScanReadError(path + ": the file's viewpoint is not a valid pose");
   scan.pose.scanner_to_survey =
       Eigen::Translation3d(position.cast<double>()) * q.normalized().cast<double>();
+  if (const std::string problem = pose_problem(scan.pose.scanner_to_survey.matrix());
+      !problem.empty())
+    throw ScanReadError(path + ": the file's viewpoint " + problem);
   scan.pose_from_file = !scan.pose.scanner_to_survey.isApprox(Eigen::Isometry3d::Identity());
   scan.invalid_dropped = drop_invalid(*scan.points);
   if (scan.points->empty()) throw ScanReadError(path + ": holds no valid points");
@@ -193,10 +228,14 @@ std::vector<Scan> read_ptx(const std::string& path) {
       next_numbers(4, "a transformation matrix row (4 numbers)");
       for (int c = 0; c < 4; ++c) m(r, c) = v[std::size_t(c)];
     }
+    // PTX stores the matrix transposed: translation in the last row.
+    if (const std::string problem = pose_problem(m.transpose()); !problem.empty())
+      throw ScanReadError(path + ":" + std::to_string(lineno - 3) +
+                          ": the transformation matrix of scan " + std::to_string(scans.size()) +
+                          " " + problem);
     Scan scan;
     scan.points.reset(new Cloud);
     scan.source = path + "#" + std::to_string(scans.size());
-    // PTX stores the matrix transposed: translation in the last row.
     scan.pose.scanner_to_survey.matrix() = m.transpose();
     scan.pose_from_file = true;
     const std::size_t n = std::size_t(cols) * std::size_t(rows);
@@ -210,6 +249,9 @@ std::vector<Scan> read_ptx(const std::string& path) {
       else
         scan.points->push_back(p);
     }
+    if (scan.points->empty())
+      throw ScanReadError(scan.source +
+                          ": holds no valid points (each is (0, 0, 0), no return, or NaN)");
     scans.push_back(std::move(scan));
   }
   if (scans.empty()) throw ScanReadError(path + ": holds no scan");
@@ -246,7 +288,12 @@ ScanPose parse_pose(const std::string& text) {
     throw std::invalid_argument("pose '" + text + "': expected X,Y,Z or X,Y,Z,YAW_DEG");
   for (double x : v)
     if (!std::isfinite(x)) throw std::invalid_argument("pose '" + text + "': not a finite number");
-  return ScanPose::from_xyz_yaw(v[0], v[1], v[2], v.size() == 4 ? v[3] : 0.0);
+  if (v.size() == 4 && std::abs(v[3]) > 360)
+    throw std::invalid_argument("pose '" + text + "': the heading must be within ±360 degrees");
+  const ScanPose pose = ScanPose::from_xyz_yaw(v[0], v[1], v[2], v.size() == 4 ? v[3] : 0.0);
+  if (const std::string problem = pose_problem(pose.scanner_to_survey.matrix()); !problem.empty())
+    throw std::invalid_argument("pose '" + text + "' " + problem);
+  return pose;
 }
 
 ScanPose read_pose_json(const std::string& path) {
@@ -268,8 +315,12 @@ ScanPose read_pose_json(const std::string& path) {
   };
   if (!j.is_object())
     throw ScanReadError(path + ": expected an object {\"x\":..,\"y\":..,\"z\":..,\"yaw_deg\":..}");
-  return ScanPose::from_xyz_yaw(num("x", true), num("y", true), num("z", true),
-                                num("yaw_deg", false));
+  const double yaw = num("yaw_deg", false);
+  if (std::abs(yaw) > 360) throw ScanReadError(path + ": yaw_deg must be within ±360 degrees");
+  const ScanPose pose = ScanPose::from_xyz_yaw(num("x", true), num("y", true), num("z", true), yaw);
+  if (const std::string problem = pose_problem(pose.scanner_to_survey.matrix()); !problem.empty())
+    throw ScanReadError(path + ": the pose " + problem);
+  return pose;
 }
 
 Cloud::Ptr to_survey_frame(const Scan& scan) {

@@ -17,6 +17,12 @@ namespace semioctree {
 
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 
+// Largest scanner coordinate a pose may give, metres: points are floats, and
+// beyond 1e5 m a float resolves no better than 8 mm; a larger value is a typo.
+constexpr double kMaxPoseCoordinate = 1e5;
+// A pose's rotation part must be orthonormal (RᵀR = I) within this, with determinant +1.
+constexpr double kRotationTolerance = 1e-4;
+
 // Scanner pose: the rigid transform from the scanner's frame to the survey frame.
 struct ScanPose {
   Eigen::Isometry3d scanner_to_survey = Eigen::Isometry3d::Identity();
@@ -49,6 +55,8 @@ class ScanReadError : public std::runtime_error {
 // ScanReadError for a file that cannot be read, is malformed or holds no point.
 std::vector<Scan> read_scans(const std::string& path);
 
+// Every pose read (PTX header, PCD/PLY viewpoint, text, JSON) is checked: finite,
+// rigid, within kMaxPoseCoordinate, a heading within ±360°.
 // "X,Y,Z,YAW_DEG" (YAW optional) → pose; throws std::invalid_argument.
 ScanPose parse_pose(const std::string& text);
 // {"x":..,"y":..,"z":..,"yaw_deg":..} → pose; throws ScanReadError.

@@ -1,8 +1,11 @@
 #include "semioctree/octomap_ext/file_io.h"
 
 #include <octomap/ColorOcTree.h>
+#include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -10,6 +13,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <mutex>
+#include <set>
 #include <sstream>
 
 #include "semioctree/octomap_ext/node_stream.h"
@@ -175,8 +180,52 @@ std::unique_ptr<SemiOcTree> read_semioctree_file(const std::string& path) {
   return std::unique_ptr<SemiOcTree>(semi);
 }
 
+namespace {
+
+// The PID of a temporary's name "NAME.tmp-PID" or "NAME.tmp-PID-N"; 0 if not ours.
+pid_t temporary_owner(const std::string& name) {
+  const std::size_t at = name.rfind(".tmp-");
+  if (at == std::string::npos || at == 0) return 0;
+  const std::string rest = name.substr(at + 5);
+  const std::size_t dash = rest.find('-');
+  const std::string pid = rest.substr(0, dash);
+  const std::string n = dash == std::string::npos ? "1" : rest.substr(dash + 1);
+  const auto digits = [](const std::string& s) {
+    return !s.empty() && s.size() <= 20 &&
+           std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c); });
+  };
+  if (!digits(pid) || !digits(n) || pid.size() > 9) return 0;
+  return pid_t(std::stol(pid));
+}
+
+}  // namespace
+
+std::size_t remove_stale_temporaries(const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  std::size_t removed = 0;
+  for (fs::directory_iterator it(dir.empty() ? "." : dir, ec), end; !ec && it != end;
+       it.increment(ec)) {
+    const pid_t pid = temporary_owner(it->path().filename().string());
+    if (pid <= 0 || pid == ::getpid() || !it->is_regular_file(ec)) continue;
+    // kill(pid, 0) fails with ESRCH only when no such process exists.
+    if (::kill(pid, 0) == 0 || errno != ESRCH) continue;
+    std::error_code rm;
+    removed += fs::remove(it->path(), rm) && !rm;
+  }
+  return removed;
+}
+
 void write_file_atomically(const std::string& path,
                            const std::function<void(std::ostream&)>& write) {
+  {
+    // Once per directory and process: later temporaries there are this run's own.
+    static std::mutex mutex;
+    static std::set<std::string> cleaned;
+    const std::string dir = std::filesystem::path(path).parent_path().string();
+    std::lock_guard<std::mutex> lock(mutex);
+    if (cleaned.insert(dir).second) remove_stale_temporaries(dir);
+  }
   const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
   {
     std::ofstream f(tmp, std::ios::binary | std::ios::trunc);

@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "option_checks.h"
+#include "semioctree/outputs.h"
 #include "semioctree/scan_io.h"
 #include "semioctree/update.h"
 #ifdef SEMIOCTREE_HAVE_SIM
@@ -14,6 +15,26 @@
 #endif
 
 namespace semioctree::cli {
+
+void check_scan_usable(const Scan& scan, const ScannerView* limits) {
+  std::size_t outside = 0;
+  const Cloud::Ptr kept = limits ? within_limits(*scan.points, *limits, &outside) : scan.points;
+  if (kept->empty()) {
+    char range[160];
+    std::snprintf(range, sizeof range,
+                  "%g to %g m, elevation %g to %g degrees; --min-range, --max-range, "
+                  "--elevation-min, --elevation-max",
+                  limits->min_range, limits->max_range, limits->elevation_min_deg,
+                  limits->elevation_max_deg);
+    throw std::invalid_argument(scan.source + ": no points within the scanner's range limits (" +
+                                range + "): all " + std::to_string(outside) + " lie outside them");
+  }
+  Eigen::AlignedBox3f box;
+  for (const pcl::PointXYZ& p : *kept) box.extend(p.getVector3fMap());
+  if (box.diagonal().norm() < 1e-3f)
+    throw std::invalid_argument(scan.source + ": all " + std::to_string(kept->size()) +
+                                " points lie within 1 mm of each other: nothing to map");
+}
 
 PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& params,
                              const ScannerView* limits) {
@@ -36,6 +57,7 @@ PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& param
         s.pose = parse_pose(in.poses[i]);
       else if (!in.pose_file.empty())
         s.pose = read_pose_json(in.pose_file);
+      check_scan_usable(s, limits);
       std::size_t outside = 0;
       if (limits) s.points = within_limits(*s.points, *limits, &outside);
       out.outside_limits += outside;
@@ -166,6 +188,19 @@ std::string source_name(const ScanSource& src) {
   return std::filesystem::path(src.scene.empty() ? src.input.files.front() : src.scene)
       .filename()
       .string();
+}
+
+std::vector<NamedPath> source_paths(const ScanSource& src) {
+  std::vector<NamedPath> out;
+  for (const std::string& f : src.input.files) out.push_back({"--cloud", f});
+  out.push_back({"--pose-file", src.input.pose_file});
+  out.push_back({"--scene", src.scene});
+  return out;
+}
+
+std::vector<std::string> map_files_written() {
+  const MapFiles names;
+  return {names.semioctree, names.color, names.occupancy, names.slice, "stats.json"};
 }
 
 bool has_extension(const std::string& path, const std::string& ext) {

@@ -8,10 +8,12 @@
 #include <string>
 #include <vector>
 
+#include "option_checks.h"
 #include "semioctree/discretize.h"
 #include "semioctree/occlusion.h"
 #include "semioctree/octomap_ext/semioctree.h"
 #include "semioctree/preprocess.h"
+#include "semioctree/scan_io.h"
 
 namespace semioctree::cli {
 
@@ -30,6 +32,11 @@ struct PreparedCloud {
   std::size_t invalid_dropped = 0;
   std::size_t outside_limits = 0;  // returns outside the scanner's limits, dropped
 };
+
+// Throws std::invalid_argument naming `scan.source` when the returns kept (its
+// points within `limits` when given) cannot be mapped: none left within the
+// scanner's limits, or all of them within 1 mm of each other (one spot, no room).
+void check_scan_usable(const Scan& scan, const ScannerView* limits);
 
 // With `limits`, each scan first loses its returns outside the scanner's
 // limits (within_limits: the scanner's mount, the robot), as in `survey`/`nbv`.
@@ -60,6 +67,12 @@ void check_scanner_limits(const ScannerView& limits);
 void add_grid_options(CLI::App& cmd, DiscretizeParams& grid);
 // The title of a slice image: the input file's name.
 std::string source_name(const ScanSource& src);
+
+// The files a ScanSource reads (--cloud, --pose-file, --scene), for
+// check_outputs_spare_inputs.
+std::vector<NamedPath> source_paths(const ScanSource& src);
+// The files write_map_files writes in its directory, and stats.json.
+std::vector<std::string> map_files_written();
 
 // True if `path` ends in `ext` (".ply"), whatever the case.
 bool has_extension(const std::string& path, const std::string& ext);

@@ -46,6 +46,9 @@ void add_classify_command(CLI::App& app) {
                   "height of the slice image in metres above the floor (default: scanner height)");
   cmd->callback([o] {
     SemiOcTree::leaf_level_for(o->disc.leaf, o->disc.coarse);
+    std::vector<std::string> written = map_files_written();
+    written.push_back("openings.json");
+    check_outputs_spare_inputs(source_paths(o->source), {}, {{{"--out", o->out}, written}});
     const PreparedCloud cloud = prepare(o->source, "classify", &o->limits);
     auto t0 = Clock::now();
     const auto tree = discretize(*cloud.pre.cloud, cloud.pre.ceiling_height, o->disc);

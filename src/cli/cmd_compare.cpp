@@ -47,6 +47,10 @@ void add_compare_command(CLI::App& app) {
   add_scanner_limit_options(*cmd, o->limits);
   cmd->add_option("--out", o->out, "output directory")->required();
   cmd->callback([o] {
+    check_outputs_spare_inputs(
+        source_paths(o->source), {},
+        {{{"--out", o->out},
+          {"comparison.json", "comparison.md", "fig15_octants.png", "slice_*.png"}}});
     const PreparedCloud cloud = prepare(o->source, "compare", &o->limits);
     std::vector<DiscretizationRun> runs;
     for (const char* method : {"semioctree", "homogeneous"}) {

@@ -16,6 +16,7 @@
 #include "commands.h"
 #include "option_checks.h"
 #include "progress_line.h"
+#include "semioctree/octomap_ext/file_io.h"
 #include "semioctree/sim/coverage.h"
 #include "semioctree/sim/ground_truth.h"
 #include "semioctree/sim/scanner.h"
@@ -45,10 +46,12 @@ nlohmann::json plan_json(const sim::CoveragePlan& plan,
 
 void run_coverage_bound(const CoverageBoundArgs& a) {
   if (a.max_scans < 1) throw std::invalid_argument("--max-scans must be at least 1");
+  check_outputs_spare_inputs({{"--scene", a.scene}}, {{"--out", a.out}});
   const auto t0 = Clock::now();
   const sim::Scene scene = sim::load_scene(a.scene);
   const sim::GroundTruth truth(scene);
   const std::string cache = a.cache.empty() ? sim::default_cache_dir() : a.cache;
+  remove_stale_temporaries(cache);  // the simulator's cache writer leaves them when killed
   const sim::CoverageReference ref = sim::load_or_compute_coverage_reference(truth, cache);
   std::printf("reference: %zu surface samples seen from %zu positions 0.5 m apart%s\n",
               ref.points.size(), ref.positions.size(), ref.from_cache ? " (from the cache)" : "");
@@ -98,6 +101,11 @@ void run_coverage_bound(const CoverageBoundArgs& a) {
   }
   for (std::size_t k = 1; k <= max_scans; ++k) {
     const sim::CoveragePlan greedy = sim::greedy_coverage_plan(covered, first, k);
+    if (greedy.views.size() < k) {
+      std::printf("plans end at %zu scans: no position adds a surface sample to them (%.2f %%)\n",
+                  k - 1, greedy.percent);
+      break;
+    }
     const sim::CoveragePlan best = sim::improve_coverage_plan(covered, greedy);
     std::printf("%6zu  %14.2f  %14.2f\n", k, greedy.percent, best.percent);
     plans.push_back({{"scans", k},

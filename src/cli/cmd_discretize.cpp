@@ -40,6 +40,8 @@ void add_discretize_command(CLI::App& app) {
                   "height of the slice image in metres above the floor (default: scanner height)");
   cmd->callback([o] {
     SemiOcTree::leaf_level_for(o->disc.leaf, o->disc.coarse);  // fail before reading anything
+    std::vector<std::string> written = map_files_written();
+    check_outputs_spare_inputs(source_paths(o->source), {}, {{{"--out", o->out}, written}});
     const PreparedCloud cloud = prepare(o->source, "discretize", &o->limits);
     const auto t0 = Clock::now();
     DiscretizeReport rep;

@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "commands.h"
+#include "option_checks.h"
 #include "semioctree/octomap_ext/export.h"
 #include "semioctree/octomap_ext/file_io.h"
 
@@ -30,6 +31,8 @@ void add_export_command(CLI::App& app) {
   cmd->callback([o] {
     if (o->color.empty() && o->bt.empty() && o->ply.empty())
       throw std::runtime_error("export: nothing to do, give --color, --bt and/or --ply");
+    check_outputs_spare_inputs({{"IN", o->in}},
+                               {{"--color", o->color}, {"--bt", o->bt}, {"--ply", o->ply}});
     const auto tree = read_semioctree_file(o->in);
     if (!o->color.empty()) {
       write_tree_file(*to_color_octree(*tree), o->color);

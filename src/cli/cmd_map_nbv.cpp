@@ -134,6 +134,9 @@ std::optional<std::vector<DetectedOpening>> find_openings_in_map(
 void run_map_nbv(const MapNbvOptions& o) {
   const auto t_start = std::chrono::steady_clock::now();
   check_scanner_limits(o.limits);
+  std::vector<std::string> written = map_files_written();
+  written.insert(written.end(), {"openings.json", "nbv.json"});
+  check_outputs_spare_inputs({{"--map", o.map}}, {}, {{{"--out", o.out}, written}});
   std::vector<Point3> scanners;
   for (const std::string& s : o.scanners) {
     const Eigen::Vector3d p = parse_pose(s).position();

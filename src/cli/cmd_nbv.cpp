@@ -51,6 +51,11 @@ void run_nbv(const NbvOptions& o) {
                                 std::to_string(o.clouds.size()) + " files, " +
                                 std::to_string(o.poses.size()) + " poses)");
   check_scanner_limits(o.limits);
+  {
+    std::vector<NamedPath> inputs;
+    for (const std::string& f : o.clouds) inputs.push_back({"--cloud", f});
+    check_outputs_spare_inputs(inputs, {}, {{{"--out", o.out}, survey_files_written()}});
+  }
   SurveyParams p;
   p.map.limits = o.limits;
   apply_planning_options(o.plan, p);
@@ -60,6 +65,7 @@ void run_nbv(const NbvOptions& o) {
   for (std::size_t i = 0; i < o.clouds.size(); ++i) {
     for (Scan& s : read_scans(o.clouds[i])) {
       if (!o.poses.empty()) s.pose = parse_pose(o.poses[i]);
+      check_scan_usable(s, &o.limits);
       std::printf("read %s: %zu points (%zu invalid dropped)\n", s.source.c_str(), s.points->size(),
                   s.invalid_dropped);
       scans.push_back(std::move(s));

@@ -1,6 +1,8 @@
 // `semioctree scan`: one synthetic 360° scan of a scene, written as PCD or PLY.
+#include <Eigen/Geometry>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -12,6 +14,7 @@
 #include "commands.h"
 #include "option_checks.h"
 #include "progress_line.h"
+#include "semioctree/octomap_ext/file_io.h"
 #include "semioctree/sim/geometry.h"
 #include "semioctree/sim/point_io.h"
 #include "semioctree/sim/raycaster.h"
@@ -68,6 +71,7 @@ void run_scan(const ScanArgs& a) {
   if (ext != ".pcd" && ext != ".ply")
     throw std::runtime_error("--out: expected a file name ending in .pcd or .ply, got \"" + a.out +
                              "\"");
+  check_outputs_spare_inputs({{"--scene", a.scene}}, {{"--out", a.out}});
 
   sim::Scene scene = sim::load_scene(a.scene, Eigen::Vector2d(pose.x, pose.y), pose.yaw_deg);
   if (a.azimuth_step > 0) scene.scanner.azimuth_step_deg = a.azimuth_step;
@@ -83,6 +87,16 @@ void run_scan(const ScanArgs& a) {
 
   const auto t0 = Clock::now();
   const sim::SceneTriangles triangles = sim::tessellate(scene);
+  // A scanner beyond the scene's footprint stands outside it: refused, not an empty scan.
+  Eigen::AlignedBox2f footprint;
+  for (const Eigen::Vector3f& v : triangles.vertices) footprint.extend(v.head<2>());
+  if (!footprint.contains(Eigen::Vector2f(float(pose.x), float(pose.y))))
+    throw std::runtime_error("--at: the scanner at (" + std::to_string(pose.x) + ", " +
+                             std::to_string(pose.y) + ") is outside the scene " + a.scene +
+                             " (its solids span x " + std::to_string(footprint.min().x()) + " to " +
+                             std::to_string(footprint.max().x()) + ", y " +
+                             std::to_string(footprint.min().y()) + " to " +
+                             std::to_string(footprint.max().y()) + ")");
   const std::unique_ptr<sim::RayCaster> caster = sim::make_ray_caster(triangles);
   const sim::ScanGrid grid = sim::scan_grid(scene.scanner);
   std::cerr << "scan: " << scene.name << " (" << triangles.triangles.size() << " triangles), "
@@ -104,6 +118,13 @@ void run_scan(const ScanArgs& a) {
   };
   const sim::Scan scan = sim::scan(*caster, scene.scanner, pose, options);
   progress.finish();
+  if (scan.points.empty())
+    throw std::runtime_error(
+        "--at: the scan from (" + std::to_string(pose.x) + ", " + std::to_string(pose.y) +
+        ") has no return: nothing of " + a.scene + " lies within the scanner's range (" +
+        std::to_string(scene.scanner.min_range) + " to " + std::to_string(scene.scanner.max_range) +
+        " m) and elevation limits; nothing written");
+  remove_stale_temporaries(std::filesystem::path(a.out).parent_path().string());
   sim::write_scan(a.out, scan);
   const double seconds = seconds_since(t0);
   std::cout << "wrote " << a.out << ": " << scan.points.size() << " points of " << scan.rays_cast

@@ -12,6 +12,7 @@
 #include "commands.h"
 #include "option_checks.h"
 #include "planning_options.h"
+#include "semioctree/octomap_ext/file_io.h"
 #include "semioctree/outputs.h"
 #include "semioctree/sim/coverage.h"
 #include "semioctree/sim/ground_truth.h"
@@ -167,6 +168,8 @@ void run_survey(const SurveyOptions& o) {
   if (o.max_scans < 1)
     throw std::invalid_argument("--max-scans must be at least 1 (got " +
                                 std::to_string(o.max_scans) + ")");
+  check_outputs_spare_inputs({{"--scene", o.scene}}, {},
+                             {{{"--out", o.out}, survey_files_written()}});
 
   std::optional<Eigen::Vector2d> start_override;
   if (!o.start.empty()) {
@@ -194,6 +197,7 @@ void run_survey(const SurveyOptions& o) {
   std::filesystem::create_directories(o.out);
 
   const std::string cache = o.cache.empty() ? sim::default_cache_dir() : o.cache;
+  remove_stale_temporaries(cache);  // the simulator's cache writer leaves them when killed
   std::optional<sim::CoverageReference> reference;  // loaded once, when first needed
   auto coverage_reference = [&]() -> const sim::CoverageReference& {
     if (!reference) reference = sim::load_or_compute_coverage_reference(truth, cache);

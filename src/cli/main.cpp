@@ -1,4 +1,6 @@
 // `semioctree`: the command-line tool (git-style subcommands).
+#include <pcl/console/print.h>
+
 #include <exception>
 #include <iostream>
 #include <new>
@@ -28,6 +30,10 @@ int main(int argc, char** argv) {
   semioctree::cli::add_survey_command(app);
   semioctree::cli::add_coverage_bound_command(app);
 #endif
+  // PCL's console warnings (RANSAC on a degenerate cloud, elements it skips)
+  // name neither the file nor the cause: the commands check their input and
+  // say both in their own error.
+  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

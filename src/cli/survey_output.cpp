@@ -43,6 +43,10 @@ void print_floor_layer_note(const RobotGeometry& robot, double leaf) {
         leaf, robot.ground_clearance);
 }
 
+std::vector<std::string> survey_files_written() {
+  return {"survey.json", "coverage_missed.ply", "scan_[0-9][0-9]/"};
+}
+
 void clear_previous_survey(const std::string& dir) {
   // A survey.json and scan_NN/ folders left by an earlier run would sit beside
   // the new ones (a 3-scan run over a 5-scan one keeps scan_03, scan_04) and

@@ -53,5 +53,7 @@ void print_floor_layer_note(const RobotGeometry& robot, double leaf);
 // Removes survey.json, coverage_missed.ply and the scan_NN/ folders an earlier run left
 // in `dir` (nothing else).
 void clear_previous_survey(const std::string& dir);
+// What a survey writes or replaces in its directory (as OutputDir::written).
+std::vector<std::string> survey_files_written();
 
 }  // namespace semioctree::cli

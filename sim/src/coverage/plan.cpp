@@ -72,6 +72,7 @@ CoveragePlan greedy_coverage_plan(const std::vector<std::vector<bool>>& covered,
   std::size_t count = bits_set(sets.set(first), sets.words);
   while (plan.views.size() < scans) {
     const auto [v, n] = sets.best_addition(sets.union_of(plan.views));
+    if (n == count) break;  // no position adds a sample: a scan more would repeat one
     plan.views.push_back(v);
     count = n;
   }

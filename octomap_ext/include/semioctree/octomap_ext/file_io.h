@@ -37,8 +37,14 @@ TreeFile read_tree_file(const std::string& path);
 std::unique_ptr<SemiOcTree> read_semioctree_file(const std::string& path);
 
 // Writes via `path + ".tmp-<pid>"` and rename(); throws FileError on failure.
+// The first write into a directory removes its stale temporaries (below).
 void write_file_atomically(const std::string& path,
                            const std::function<void(std::ostream&)>& write);
+// Removes the temporaries interrupted writers left in `dir`: files named
+// NAME.tmp-PID (write_file_atomically) or NAME.tmp-PID-N (the simulator's
+// writer) whose process PID is not running. Nothing else; never throws.
+// Returns how many were removed.
+std::size_t remove_stale_temporaries(const std::string& dir);
 // .ot of any tree type (the tree is not modified: no pruning).
 void write_tree_file(const octomap::AbstractOcTree& tree, const std::string& path);
 // .bt occupancy file (OctoMap's writeBinaryConst: the tree is not pruned).

@@ -15,8 +15,9 @@ struct CoveragePlan {
 };
 
 // Greedy: after `first`, each scan is the position that adds most samples (lowest index on
-// ties), until `scans` scans. Throws std::invalid_argument on empty or unequal sets or a
-// `first` out of range.
+// ties), until `scans` scans or until no position adds a sample (the plan is then shorter
+// than `scans`: every position is in it or adds nothing). Throws std::invalid_argument on
+// empty or unequal sets or a `first` out of range.
 CoveragePlan greedy_coverage_plan(const std::vector<std::vector<bool>>& covered, std::size_t first,
                                   std::size_t scans);
 
