@@ -366,6 +366,21 @@ void check_pcd_ascii(const std::string& path, std::istream& in, const PcdHeader&
   }
 }
 
+// PCL's writer of PCLPointCloud2 binary data stretches the file to a memory
+// page plus the data, whatever the header's length: the file then ends in up
+// to a page of zeros (pages are at most 64 KiB; the header may since have been
+// edited). True for such a tail: all zero, shorter than 64 KiB.
+bool pcl_page_padding(std::istream& in, const PcdHeader& h, std::uint64_t bytes) {
+  const std::uint64_t tail_size = h.file_size - h.data_offset - bytes;
+  if (tail_size >= 65536) return false;
+  in.clear();
+  in.seekg(std::streamoff(h.data_offset + bytes));
+  std::string tail(std::size_t(tail_size), '\1');
+  in.read(tail.data(), std::streamsize(tail.size()));
+  return std::size_t(in.gcount()) == tail.size() &&
+         tail.find_first_not_of('\0') == std::string::npos;
+}
+
 }  // namespace
 
 std::string check_pcd_file(const std::string& path) {
@@ -391,8 +406,9 @@ std::string check_pcd_file(const std::string& path) {
     throw ScanReadError(path + ": PCD file is truncated or its POINTS is wrong: " +
                         std::to_string(h.points) + " points need " + std::to_string(bytes) +
                         " data bytes, the file has " + std::to_string(available));
-  // PCL reads POINTS rows and ignores the rest: a whole row more is a point dropped.
-  if (h.data_type == 1 && available - bytes >= h.point_step)
+  // PCL reads POINTS rows and ignores the rest: a whole row more is a point
+  // dropped. PCL's own padding is not a row (pcl_page_padding).
+  if (h.data_type == 1 && available - bytes >= h.point_step && !pcl_page_padding(f, h, bytes))
     throw ScanReadError(
         path + ": PCD POINTS is less than the file's data rows: " + std::to_string(h.points) +
         " points of " + std::to_string(h.point_step) + " bytes take " + std::to_string(bytes) +

@@ -1,8 +1,10 @@
 // Scan readers (PCD, PLY, XYZ, PTX) and poses.
 #include <gtest/gtest.h>
+#include <pcl/conversions.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -419,6 +421,28 @@ TEST(ScanIoHeaders, PclWrittenFilesStillRead) {
     ++files;
   }
   EXPECT_EQ(files, 13u);
+  std::filesystem::remove_all(dir);
+}
+
+// PCL's binary writer of a PCLPointCloud2 pads the file to a page past the
+// data, with zeros: that reads. The same bytes not zero are rows beyond POINTS.
+TEST(ScanIoHeaders, PclPagePaddingIsNotRowsBeyondPoints) {
+  const auto dir = testing::temp_dir("pcl-padded");
+  Cloud c;
+  for (int i = 0; i < 2000; ++i) c.push_back(pcl::PointXYZ{float(i), float(i % 7), 0.5f});
+  pcl::PCLPointCloud2 blob;
+  pcl::toPCLPointCloud2(c, blob);
+  const std::string path = (dir / "padded.pcd").string();
+  ASSERT_EQ(pcl::PCDWriter().writeBinary(path, blob), 0);
+  const std::uint64_t size = std::filesystem::file_size(path);
+  ASSERT_GT(size, 2000u * 12 + 200) << "PCL no longer pads: this test has nothing to test";
+  EXPECT_EQ(read_scans(path)[0].points->size(), 2000u);
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  in.close();
+  std::fill(bytes.end() - 12, bytes.end(), '\x01');
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+  expect_rejected(path, "PCD POINTS is less than the file's data rows");
   std::filesystem::remove_all(dir);
 }
 

@@ -14,6 +14,7 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <numeric>
+#include <vector>
 
 #include "support/cli_run.h"
 
@@ -44,13 +45,18 @@ json survey(const std::string& name, const std::string& args) {
   return r.exit_code == 0 ? read_json(out / "survey.json") : json();
 }
 
-// `coverage-bound` on the small box room: plans of 1..3 scans from the start.
+// `coverage-bound` on the one-door-window room: plans of 1..3 scans from the
+// start. Asked for 4, the plans end at 3 (100 %): a fourth scan would only
+// repeat a position, which the plans once did.
 TEST(CoverageBound, PlansStartAtTheStartAndLocalSearchIsNeverWorse) {
   const fs::path out = scratch() / "bound.json";
   const auto r = run_cli("coverage-bound --scene " + kScenes +
-                         "box-room.scene.json --spacing 1.0 --max-scans 3 --out " + out.string() +
-                         " --cache " + (scratch() / "cache").string());
+                         "one-door-window.scene.json --spacing 1.0 --max-scans 4 --out " +
+                         out.string() + " --cache " + (scratch() / "cache").string());
   ASSERT_EQ(r.exit_code, 0) << r.all();
+  EXPECT_NE(r.out.find("plans end at 3 scans: no position adds a surface sample"),
+            std::string::npos)
+      << r.out;
   const json j = read_json(out);
   ASSERT_EQ(j["plans"].size(), 3u);
   double previous = 0;
@@ -60,16 +66,33 @@ TEST(CoverageBound, PlansStartAtTheStartAndLocalSearchIsNeverWorse) {
     const double greedy = plan["greedy"]["coverage_percent"];
     const double best = plan["local_search"]["coverage_percent"];
     EXPECT_EQ(plan["greedy"]["positions"].size(), k + 1);
-    EXPECT_EQ(plan["greedy"]["positions"][0], json({2.0, 1.5}));  // the robot's start
-    EXPECT_EQ(plan["local_search"]["positions"][0], json({2.0, 1.5}));
+    EXPECT_EQ(plan["greedy"]["positions"][0], json({1.0, 2.0}));  // the robot's start
+    EXPECT_EQ(plan["local_search"]["positions"][0], json({1.0, 2.0}));
+    for (const char* kind : {"greedy", "local_search"}) {
+      std::vector<json> seen;
+      for (const json& p : plan[kind]["positions"]) {
+        EXPECT_EQ(std::count(seen.begin(), seen.end(), p), 0) << kind << " repeats " << p;
+        seen.push_back(p);
+      }
+    }
     EXPECT_GE(best, greedy);
-    EXPECT_GE(greedy, previous);
+    EXPECT_GT(greedy, previous);  // each scan adds: the plans end before one would not
     EXPECT_GT(greedy, 0.0);
     EXPECT_LE(best, 100.0);
     previous = greedy;
   }
   EXPECT_EQ(j["plans"][0]["greedy"]["coverage_percent"],
             j["plans"][0]["local_search"]["coverage_percent"]);
+  // The empty box room is covered from its start: one plan, 100 %.
+  const fs::path box = scratch() / "bound_box.json";
+  const auto one = run_cli("coverage-bound --scene " + kScenes +
+                           "box-room.scene.json --spacing 1.0 --max-scans 3 --out " + box.string() +
+                           " --cache " + (scratch() / "cache").string());
+  ASSERT_EQ(one.exit_code, 0) << one.all();
+  EXPECT_NE(one.out.find("plans end at 1 scan:"), std::string::npos) << one.out;
+  const json jb = read_json(box);
+  ASSERT_EQ(jb["plans"].size(), 1u);
+  EXPECT_EQ(jb["plans"][0]["greedy"]["coverage_percent"], 100.0);
   const auto bad =
       run_cli("coverage-bound --scene " + kScenes + "box-room.scene.json --max-scans 0");
   EXPECT_EQ(bad.exit_code, 1);

@@ -102,8 +102,8 @@ void run_coverage_bound(const CoverageBoundArgs& a) {
   for (std::size_t k = 1; k <= max_scans; ++k) {
     const sim::CoveragePlan greedy = sim::greedy_coverage_plan(covered, first, k);
     if (greedy.views.size() < k) {
-      std::printf("plans end at %zu scans: no position adds a surface sample to them (%.2f %%)\n",
-                  k - 1, greedy.percent);
+      std::printf("plans end at %zu scan%s: no position adds a surface sample to them (%.2f %%)\n",
+                  k - 1, k - 1 == 1 ? "" : "s", greedy.percent);
       break;
     }
     const sim::CoveragePlan best = sim::improve_coverage_plan(covered, greedy);
