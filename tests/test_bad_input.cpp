@@ -261,13 +261,14 @@ std::vector<Case> cases() {
                  return "coverage-bound --scene " + scene + " --out " + scene;
                },
                {"--out", "box.scene.json is the input --scene"}});
-  // 4. A scan from outside the scene, or with no return at all.
-  c.push_back({"scan-outside-the-scene",
+  // 4. A scan from beyond the scanner's range of the scene, or with no return at all.
+  c.push_back({"scan-beyond-range-of-the-scene",
                [](const fs::path& d) {
                  return "scan --scene " + kScenes + "box-room.scene.json --at 1e5,0 --out " +
                         (d / "far.pcd").string();
                },
-               {"--at", "(100000.000000, 0.000000) is outside the scene", "box-room.scene.json"}});
+               {"--at", "the scanner at (100000, 0) is", "from the scene", "box-room.scene.json",
+                "beyond the scanner's maximum range of 60 m"}});
   c.push_back({"scan-without-a-return",
                [](const fs::path& d) {
                  nlohmann::json scene =

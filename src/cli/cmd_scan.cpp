@@ -87,16 +87,21 @@ void run_scan(const ScanArgs& a) {
 
   const auto t0 = Clock::now();
   const sim::SceneTriangles triangles = sim::tessellate(scene);
-  // A scanner beyond the scene's footprint stands outside it: refused, not an empty scan.
-  Eigen::AlignedBox2f footprint;
-  for (const Eigen::Vector3f& v : triangles.vertices) footprint.extend(v.head<2>());
-  if (!footprint.contains(Eigen::Vector2f(float(pose.x), float(pose.y))))
-    throw std::runtime_error("--at: the scanner at (" + std::to_string(pose.x) + ", " +
-                             std::to_string(pose.y) + ") is outside the scene " + a.scene +
-                             " (its solids span x " + std::to_string(footprint.min().x()) + " to " +
-                             std::to_string(footprint.max().x()) + ", y " +
-                             std::to_string(footprint.min().y()) + " to " +
-                             std::to_string(footprint.max().y()) + ")");
+  // A scanner farther from every solid than its maximum range gets no return:
+  // refused before casting (a scan from outside the scene but within range is fine).
+  Eigen::AlignedBox3f solids_box;
+  for (const Eigen::Vector3f& v : triangles.vertices) solids_box.extend(v);
+  const Eigen::Vector3f centre(float(pose.x), float(pose.y), float(scene.scanner.height));
+  const double distance = solids_box.isEmpty() ? HUGE_VAL : solids_box.exteriorDistance(centre);
+  if (distance > scene.scanner.max_range) {
+    std::ostringstream why;
+    why << "--at: the scanner at (" << pose.x << ", " << pose.y << ") is " << distance
+        << " m from the scene " << a.scene << " (its solids span x " << solids_box.min().x()
+        << " to " << solids_box.max().x() << ", y " << solids_box.min().y() << " to "
+        << solids_box.max().y() << "), beyond the scanner's maximum range of "
+        << scene.scanner.max_range << " m: it would get no return";
+    throw std::runtime_error(why.str());
+  }
   const std::unique_ptr<sim::RayCaster> caster = sim::make_ray_caster(triangles);
   const sim::ScanGrid grid = sim::scan_grid(scene.scanner);
   std::cerr << "scan: " << scene.name << " (" << triangles.triangles.size() << " triangles), "
