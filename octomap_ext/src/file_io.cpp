@@ -207,7 +207,8 @@ std::size_t remove_stale_temporaries(const std::string& dir) {
   for (fs::directory_iterator it(dir.empty() ? "." : dir, ec), end; !ec && it != end;
        it.increment(ec)) {
     const pid_t pid = temporary_owner(it->path().filename().string());
-    if (pid <= 0 || pid == ::getpid() || !it->is_regular_file(ec)) continue;
+    std::error_code type;
+    if (pid <= 0 || pid == ::getpid() || !it->is_regular_file(type)) continue;
     // kill(pid, 0) fails with ESRCH only when no such process exists.
     if (::kill(pid, 0) == 0 || errno != ESRCH) continue;
     std::error_code rm;

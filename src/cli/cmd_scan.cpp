@@ -123,12 +123,13 @@ void run_scan(const ScanArgs& a) {
   };
   const sim::Scan scan = sim::scan(*caster, scene.scanner, pose, options);
   progress.finish();
-  if (scan.points.empty())
-    throw std::runtime_error(
-        "--at: the scan from (" + std::to_string(pose.x) + ", " + std::to_string(pose.y) +
-        ") has no return: nothing of " + a.scene + " lies within the scanner's range (" +
-        std::to_string(scene.scanner.min_range) + " to " + std::to_string(scene.scanner.max_range) +
-        " m) and elevation limits; nothing written");
+  if (scan.points.empty()) {
+    std::ostringstream why;
+    why << "--at: the scan from (" << pose.x << ", " << pose.y << ") has no return: nothing of "
+        << a.scene << " lies within the scanner's range (" << scene.scanner.min_range << " to "
+        << scene.scanner.max_range << " m) and elevation limits; nothing written";
+    throw std::runtime_error(why.str());
+  }
   remove_stale_temporaries(std::filesystem::path(a.out).parent_path().string());
   sim::write_scan(a.out, scan);
   const double seconds = seconds_since(t0);
