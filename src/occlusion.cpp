@@ -77,6 +77,31 @@ void ReturnDirections::close_gaps() {
   bins_.swap(grown);
 }
 
+void ReturnDirections::open_above() {
+  // Rows from the zenith down to the horizon; `covered` says, per degree of azimuth,
+  // whether a row above (or this one) had returns there. A bin spans the degrees its
+  // azimuth range touches; it opens when none of them is covered from above.
+  const DirectionBins& b = direction_bins();
+  constexpr int kSectors = 360;
+  std::vector<std::uint8_t> covered(kSectors, 0);
+  for (int r = DirectionBins::kRows - 1; r >= DirectionBins::kRows / 2; --r) {
+    const int n = b.count[r];
+    std::vector<std::uint8_t> covered_below(covered);
+    for (int i = 0; i < n; ++i) {
+      const int s0 = int(std::floor(double(i) * kSectors / n));
+      const int s1 = std::min(kSectors, int(std::ceil(double(i + 1) * kSectors / n)));
+      std::uint8_t& bin = bins_[std::size_t(b.first[r] + i)];
+      if (bin) {
+        std::fill(covered_below.begin() + s0, covered_below.begin() + s1, std::uint8_t(1));
+      } else if (std::none_of(covered.begin() + s0, covered.begin() + s1,
+                              [](std::uint8_t c) { return c != 0; })) {
+        bin = 1;
+      }
+    }
+    covered.swap(covered_below);
+  }
+}
+
 bool ReturnDirections::has(double dx, double dy, double dz) const {
   const DirectionBins& b = direction_bins();
   const int r = b.row_of(dx, dy, dz);
@@ -88,10 +113,12 @@ std::size_t ReturnDirections::bins_with_returns() const {
 }
 
 std::shared_ptr<const ReturnDirections> return_directions(const Cloud& scan,
-                                                          const Eigen::Matrix3d& scanner_to_map) {
+                                                          const Eigen::Matrix3d& scanner_to_map,
+                                                          bool open_above) {
   auto r = std::make_shared<ReturnDirections>();
   for (const auto& p : scan) r->add(scanner_to_map * Eigen::Vector3d(p.x, p.y, p.z));
   r->close_gaps();
+  if (open_above) r->open_above();
   return r;
 }
 

@@ -10,7 +10,10 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <numeric>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <vector>
@@ -25,6 +28,9 @@ struct HorizontalPlane {
   Eigen::Vector3d normal;   // oriented to +z
   double d = 0;             // normal·p + d = 0
   std::size_t inliers = 0;  // on the full cloud
+  // Its band of heights holds at least twice as many points as either band of the same
+  // width next to it: a horizontal surface, not a band of wall (docs/data-flow.md).
+  bool stands_out = false;
   double height_at(const Eigen::Vector2d& xy) const {
     return -(d + normal.x() * xy.x() + normal.y() * xy.y()) / normal.z();
   }
@@ -95,6 +101,12 @@ std::vector<HorizontalPlane> find_horizontal_planes(const Cloud& input, const Pr
     const auto hi = std::upper_bound(h.begin(), h.end(), c + w);
     return lo == hi ? c : std::accumulate(lo, hi, 0.0) / double(hi - lo);
   };
+  // The plane at height c holds at least as many points as the background (the walls)
+  // within its band: twice as many as either neighbouring band.
+  auto stands_out = [&](double c) {
+    return within(c) >= 2 * std::max(within(c - 2 * w), within(c + 2 * w));
+  };
+  planes.front().stands_out = stands_out(-first.d);
   std::vector<double> taken{-first.d};
   while (planes.size() < 8) {
     double best_c = 0;
@@ -112,6 +124,7 @@ std::vector<HorizontalPlane> find_horizontal_planes(const Cloud& input, const Pr
     HorizontalPlane plane = first;
     plane.d = -c;
     plane.inliers = std::size_t(double(within(c)) * scale);
+    plane.stands_out = stands_out(c);
     planes.push_back(plane);
   }
   return planes;
@@ -170,6 +183,17 @@ HeightPeak fit_peak(const std::vector<float>& z, double guess, const PreprocessP
   return peak;
 }
 
+// The q-quantile of the points' heights, nudged just above so that the point
+// itself lies below it (the map keeps z < height); none for an empty cloud.
+std::optional<double> top_of_points(const Cloud& cloud, double q) {
+  if (cloud.empty()) return std::nullopt;
+  std::vector<float> z(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) z[i] = cloud[i].z;
+  const auto k = std::size_t(std::clamp(q, 0.0, 1.0) * double(z.size() - 1));
+  std::nth_element(z.begin(), z.begin() + std::ptrdiff_t(k), z.end());
+  return std::nextafter(double(z[k]), std::numeric_limits<double>::infinity());
+}
+
 }  // namespace
 
 namespace {
@@ -217,13 +241,12 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   // lowest: a scanner near a window also sees the ground outside, lower than
   // the floor but a small plane (the floor lies all around the scanner).
   // Not simply the largest: a big table can out-count a cluttered floor.
-  // Ceiling: the highest plane. Heights compared at the centroid.
+  // Heights compared at the centroid.
   Eigen::Vector4f centroid;
   pcl::compute3DCentroid(input, centroid);
   const Eigen::Vector2d c(centroid.x(), centroid.y());
   auto by_height = [&](const auto& a, const auto& b) { return a.height_at(c) < b.height_at(c); };
   auto lowest = std::min_element(planes.begin(), planes.end(), by_height);
-  auto highest = std::max_element(planes.begin(), planes.end(), by_height);
   std::size_t largest_below = 0;
   for (const auto& pl : planes)
     if (pl.height_at(c) < centroid.z()) largest_below = std::max(largest_below, pl.inliers);
@@ -233,13 +256,15 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     if (it->height_at(c) < centroid.z() && big && (!lowest_big || by_height(*it, *lowest)))
       lowest = it;
   }
-  const double gap = highest->height_at(c) - lowest->height_at(c);
-  if (gap < p.min_room_height) {
-    std::ostringstream m;
-    m << "found no floor and ceiling pair: the horizontal planes span only " << gap
-      << " m (need a floor and a ceiling at least " << p.min_room_height << " m apart)";
-    throw PreprocessError(m.str());
-  }
+  // Ceiling: the highest plane, if it is a horizontal surface (not a band of
+  // wall) at least min_room_height above the floor. Without one (an open
+  // ceiling, one beyond the scanner's range or elevation) the floor alone
+  // levels the cloud.
+  auto highest = planes.end();
+  for (auto it = planes.begin(); it != planes.end(); ++it)
+    if (it->stands_out && (highest == planes.end() || by_height(*highest, *it))) highest = it;
+  r.ceiling_found =
+      highest != planes.end() && highest->height_at(c) - lowest->height_at(c) >= p.min_room_height;
   // Level by the floor: its normal refined by a least-squares fit to all its
   // inliers in the full cloud (RANSAC saw a subset only).
   const Eigen::Vector3d n = refine_normal(input, *lowest, p.ransac_distance);
@@ -248,7 +273,7 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   r.beta_deg = std::atan(n.y() / n.z()) * 180.0 / M_PI;
   const Eigen::Quaterniond level = Eigen::Quaterniond::FromTwoVectors(n, Eigen::Vector3d::UnitZ());
 
-  // Rotate, then find both peaks of the z histogram near the planes' heights.
+  // Rotate, then find the peaks of the z histogram near the planes' heights.
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = level.toRotationMatrix();
   Cloud rotated;
@@ -256,18 +281,19 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   std::vector<float> z(rotated.size());
   for (std::size_t i = 0; i < rotated.size(); ++i) z[i] = rotated[i].z;
   const Eigen::Vector3d on_floor = T * Eigen::Vector3d(c.x(), c.y(), lowest->height_at(c));
-  const Eigen::Vector3d on_ceiling = T * Eigen::Vector3d(c.x(), c.y(), highest->height_at(c));
   r.floor = fit_peak(z, on_floor.z(), p);
-  r.ceiling = fit_peak(z, on_ceiling.z(), p);
   r.floor.plane_inliers = lowest->inliers;
-  r.ceiling.plane_inliers = highest->inliers;
+  if (r.ceiling_found) {
+    const Eigen::Vector3d on_ceiling = T * Eigen::Vector3d(c.x(), c.y(), highest->height_at(c));
+    r.ceiling = fit_peak(z, on_ceiling.z(), p);
+    r.ceiling.plane_inliers = highest->inliers;
+  }
 
   // Floor to z = 0.
   T.pretranslate(Eigen::Vector3d(0, 0, -r.floor.center));
   r.transform = T;
-  r.ceiling.center -= r.floor.center;
+  if (r.ceiling_found) r.ceiling.center -= r.floor.center;
   r.floor.center = 0;
-  r.ceiling_height = r.ceiling.center;
 
   Cloud::Ptr cut(new Cloud);
   cut->reserve(rotated.size());
@@ -276,11 +302,30 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     const pcl::PointXYZ v(q.x, q.y, float(double(q.z) + T.translation().z()));
     if (std::fabs(v.z - r.floor.center) <= zf) {
       ++r.floor.removed;
-    } else if (std::fabs(v.z - r.ceiling.center) <= zc) {
+    } else if (r.ceiling_found && std::fabs(v.z - r.ceiling.center) <= zc) {
       ++r.ceiling.removed;
     } else {
       cut->push_back(v);
     }
+  }
+  // The room's height: given, the ceiling's, or the top of the points left.
+  if (p.ceiling_height > 0) {
+    r.ceiling_height = p.ceiling_height;
+    r.height_from = RoomHeightFrom::kGiven;
+  } else if (r.ceiling_found) {
+    r.ceiling_height = r.ceiling.center;
+    r.height_from = RoomHeightFrom::kCeiling;
+  } else {
+    const std::optional<double> top = top_of_points(*cut, p.top_quantile);
+    if (!top || !(*top > 0)) {
+      std::ostringstream m;
+      m << "found a floor but no ceiling (no horizontal surface at least " << p.min_room_height
+        << " m above it) and no point above the floor to take the room's height from; give "
+           "the ceiling height";
+      throw PreprocessError(m.str());
+    }
+    r.ceiling_height = *top;
+    r.height_from = RoomHeightFrom::kPoints;
   }
   r.after_cut = cut->size();
 
@@ -321,6 +366,33 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   r.decimation_spacing = spacing;
   r.output_points = r.cloud->size();
   return r;
+}
+
+const char* to_string(RoomHeightFrom from) {
+  switch (from) {
+    case RoomHeightFrom::kCeiling:
+      return "ceiling";
+    case RoomHeightFrom::kPoints:
+      return "points";
+    case RoomHeightFrom::kGiven:
+      return "given";
+  }
+  return "?";
+}
+
+std::string describe_room_height(bool ceiling_found, RoomHeightFrom from, double height) {
+  char h[32];
+  std::snprintf(h, sizeof h, "%.2f m", height);
+  switch (from) {
+    case RoomHeightFrom::kCeiling:
+      return std::string("ceiling ") + h;
+    case RoomHeightFrom::kPoints:
+      return std::string("no ceiling found, height ") + h + " from the points";
+    case RoomHeightFrom::kGiven:
+      return std::string(ceiling_found ? "ceiling found and cut" : "no ceiling found") +
+             ", height " + h + " given";
+  }
+  return h;
 }
 
 }  // namespace semioctree

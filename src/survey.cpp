@@ -93,6 +93,8 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
   const PreprocessResult pre = preprocess(*seen, params_.preprocess);
   rec.points_kept = pre.output_points;
   rec.ceiling_height = pre.ceiling_height;
+  rec.ceiling_found = pre.ceiling_found;
+  rec.height_from = pre.height_from;
   rec.tilt_alpha_deg = pre.alpha_deg;
   rec.tilt_beta_deg = pre.beta_deg;
   rec.seconds.preprocess = seconds_since(t0);
@@ -135,8 +137,9 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
   if (rec.registration) observer_->stage_done(SurveyStage::kRegistered, rec);
 
   // Stages 3-5 (8 for later scans): occupancy, openings, occlusion.
-  rec.update = map_.add_scan(*registered, scanner, pre.ceiling_height,
-                             return_directions(*seen, rec.scanner_to_survey.linear()));
+  rec.update =
+      map_.add_scan(*registered, scanner, pre.ceiling_height,
+                    return_directions(*seen, rec.scanner_to_survey.linear(), !pre.ceiling_found));
   rec.seconds.occupancy = rec.update.seconds_occupancy;
   rec.seconds.openings = rec.update.seconds_openings;
   rec.seconds.occlusion = rec.update.seconds_occlusion;

@@ -351,6 +351,46 @@ TEST(Occlusion, ReturnDirectionsAreBinnedByDegreeAndTheirGapsClosed) {
   EXPECT_FALSE(sparse.has(deg(30, 80).x(), deg(30, 80).y(), deg(30, 80).z()));
 }
 
+// A scan without a ceiling: returns up to 20° of elevation all around (walls), and to 60°
+// in azimuths 90°..120° (a tall cabinet nearby), but none through a window at azimuths
+// 0°..30°, elevations 0°..10°. Opened above, the directions over the walls count as having
+// returns (open sky); the window and whatever lies under the cabinet's top stay hidden.
+TEST(Occlusion, ReturnDirectionsOpenAboveTheHighestReturnOfEachAzimuth) {
+  const auto deg = [](double a_deg, double e_deg) {
+    const double a = a_deg * M_PI / 180, e = e_deg * M_PI / 180;
+    return Eigen::Vector3d(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e));
+  };
+  ReturnDirections r;
+  for (double a = -180; a < 180; a += 0.5)
+    for (double e = -60; e <= 20; e += 0.5) {
+      const bool window = a >= 0 && a <= 30 && e >= 0 && e <= 10;
+      const bool cabinet_gap = a >= 90 && a <= 120 && e > 25 && e < 35;  // nothing seen there
+      if (!window && !cabinet_gap) r.add(deg(a, e));
+    }
+  for (double a = 90; a <= 120; a += 0.5)
+    for (double e = 20; e <= 60; e += 0.5)
+      if (e <= 25 || e >= 35) r.add(deg(a, e));
+  r.close_gaps();
+  auto has = [&](const ReturnDirections& d, double a, double e) {
+    const Eigen::Vector3d v = deg(a, e);
+    return d.has(v.x(), v.y(), v.z());
+  };
+  EXPECT_FALSE(has(r, 45, 40));  // before: above the walls, no returns
+  ReturnDirections open = r;
+  open.open_above();
+  // (Beside the cabinet, a few degrees of bins that its closed gaps touch stay hidden.)
+  for (double a = -179.5; a < 180; a += 7) {
+    if (a >= 84 && a <= 126) continue;
+    for (double e : {25.0, 45.0, 70.0, 89.9}) EXPECT_TRUE(has(open, a, e)) << a << ", " << e;
+  }
+  EXPECT_TRUE(has(open, 100, 65));          // above the cabinet
+  EXPECT_FALSE(has(open, 100, 30));         // under the cabinet's top: hidden
+  EXPECT_FALSE(has(open, 15, 5));           // the window
+  for (double a = -179.5; a < 180; a += 7)  // below the horizon: as it was
+    for (double e : {-89.9, -70.0, -30.0, -1.0}) EXPECT_EQ(has(open, a, e), has(r, a, e));
+  EXPECT_GT(open.bins_with_returns(), r.bins_with_returns());
+}
+
 // A wall 0.4 m from the scanner: the scanner drops the returns nearer than its minimum
 // range (0.6 m), so the map has a hole in the wall there (a disc of 0.45 m radius) and
 // lines through it met nothing. With the directions the scan got returns in, the space

@@ -1,4 +1,5 @@
-// Preprocessing (paper 2.1): levelling by RANSAC floor/ceiling planes (Eq 1-2),
+// Preprocessing (paper 2.1): levelling by RANSAC floor/ceiling planes (Eq 1-2; the floor
+// alone without a ceiling),
 // floor to z = 0, z-histogram floor/ceiling removal at 2σ, decimation.
 #include <gtest/gtest.h>
 #include <pcl/common/centroid.h>
@@ -44,6 +45,53 @@ TEST(Preprocess, RecoversKnownTiltWithinATenthOfADegree) {
       EXPECT_NEAR(levelled.z(), 0.0, 0.01) << "floor corner";
     }
   }
+}
+
+// An open ceiling: the floor alone levels the cloud, its points alone are cut, and the
+// room's height is the top of the walls. The walls' bands of heights hold more points than
+// min_plane_fraction, but are no horizontal surface: no ceiling is made of them.
+TEST(Preprocess, LevelsByTheFloorAloneWithoutACeiling) {
+  const double spacing = 0.03;
+  const auto room = testing::synthetic_room(8, 6, 3, spacing, 0.002, 1, 3.0, 2.5, 1.5, false);
+  for (const auto& [a, b] : {std::pair{3.0, -2.0}, std::pair{-7.5, 4.0}, std::pair{0.0, 0.0}}) {
+    const auto tilted = testing::tilt(*room, a, b);
+    const PreprocessResult r = preprocess(*tilted);
+    const auto [want_a, want_b] = eq1_angles(a, b);
+    EXPECT_NEAR(r.alpha_deg, want_a, 0.1) << "alpha for tilt " << a << ", " << b;
+    EXPECT_NEAR(r.beta_deg, want_b, 0.1) << "beta for tilt " << a << ", " << b;
+    EXPECT_FALSE(r.ceiling_found);
+    EXPECT_EQ(r.height_from, RoomHeightFrom::kPoints);
+    EXPECT_EQ(r.ceiling.removed, 0u);
+    // The top of the walls (their last row of points is at about 3 m).
+    EXPECT_NEAR(r.ceiling_height, 3.0, 0.01);
+    const Eigen::Matrix3d R = (Eigen::AngleAxisd(b * M_PI / 180, Eigen::Vector3d::UnitX()) *
+                               Eigen::AngleAxisd(a * M_PI / 180, Eigen::Vector3d::UnitY()))
+                                  .toRotationMatrix();
+    for (const Eigen::Vector3d& corner :
+         {Eigen::Vector3d(-3, -2.5, -1.5), Eigen::Vector3d(5, 3.5, -1.5)}) {
+      const Eigen::Vector3d levelled = r.transform * (R * corner);
+      EXPECT_NEAR(levelled.z(), 0.0, 0.01) << "floor corner";
+    }
+    // The floor's points went, the walls' stayed (up to the top row).
+    EXPECT_EQ(r.after_cut, r.input_points - r.floor.removed);
+    const double per_plane = (std::floor(8 / spacing) + 1) * (std::floor(6 / spacing) + 1);
+    EXPECT_NEAR(double(r.floor.removed), 0.954 * per_plane, 0.03 * per_plane);
+    std::size_t high = 0;
+    for (const auto& p : *r.cloud) high += p.z > 2.9;
+    EXPECT_GT(high, 1000u);
+  }
+  // A height given replaces the points' top.
+  PreprocessParams given;
+  given.ceiling_height = 2.5;
+  const PreprocessResult g = preprocess(*room, given);
+  EXPECT_FALSE(g.ceiling_found);
+  EXPECT_EQ(g.height_from, RoomHeightFrom::kGiven);
+  EXPECT_DOUBLE_EQ(g.ceiling_height, 2.5);
+  // With a ceiling, the ceiling's height, as before.
+  const PreprocessResult closed = preprocess(*testing::synthetic_room());
+  EXPECT_TRUE(closed.ceiling_found);
+  EXPECT_EQ(closed.height_from, RoomHeightFrom::kCeiling);
+  EXPECT_NEAR(closed.ceiling_height, 3.0, 0.01);
 }
 
 TEST(Preprocess, RemovesFloorAndCeilingWithinTwoSigma) {
@@ -103,7 +151,7 @@ TEST(Preprocess, ClearErrors) {
   Cloud few;
   for (int i = 0; i < 10; ++i) few.push_back(pcl::PointXYZ{float(i), 0.f, 0.f});
   EXPECT_THROW(preprocess(few), PreprocessError);
-  // Only a floor: no ceiling plane.
+  // Only a floor: no ceiling plane, and no point above the floor to take a height from.
   Cloud floor_only;
   for (double x = 0; x < 5; x += 0.02)
     for (double y = 0; y < 5; y += 0.02)

@@ -486,6 +486,13 @@ TEST(SceneFiles, ShippedScenesLoad) {
   EXPECT_EQ(doors, 1);
   EXPECT_EQ(windows, 1);
   EXPECT_EQ(odw.boxes.size(), 1u);
+
+  // The open office has no ceiling: its one slab is the floor.
+  const Scene office = load_scene_json(kScenes + "/open-office.scene.json");
+  EXPECT_EQ(office.name, "open-office");
+  ASSERT_EQ(office.slabs.size(), 1u);
+  EXPECT_DOUBLE_EQ(office.slabs[0].z1, 0.0);
+  EXPECT_FALSE(office.boxes.empty());
 }
 
 TEST(SceneFiles, LoadSceneDispatchesOnTheExtension) {

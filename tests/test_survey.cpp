@@ -261,8 +261,13 @@ TEST(Survey, WritesEveryOutputWithTheDocumentedSchema) {
   ASSERT_LE(j["scans"].size(), 2u);
   for (const json& s : j["scans"]) {
     for (const char* k : {"index", "pose", "true_pose", "points_raw", "points_kept", "octants",
-                          "volume_percent", "stop_percent", "nbv", "seconds"})
+                          "volume_percent", "stop_percent", "nbv", "seconds", "ceiling_found",
+                          "ceiling_height", "ceiling_height_from"})
       EXPECT_TRUE(s.contains(k)) << k;
+    // The box room's ceiling (at 2.8 m) was found and gives the room's height.
+    EXPECT_TRUE(s["ceiling_found"].get<bool>());
+    EXPECT_EQ(s["ceiling_height_from"], "ceiling");
+    EXPECT_NEAR(s["ceiling_height"].get<double>(), 2.8, 0.01);
     for (const char* k : {"x", "y", "z", "yaw_deg"}) EXPECT_TRUE(s["pose"].contains(k)) << k;
     for (const char* k :
          {"preprocess", "register", "occupancy", "openings", "occlusion", "nbv", "total"})
@@ -438,6 +443,25 @@ TEST_P(LabSurvey, StopsWithinFiveScansAndCoversTheRoom) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Seeds, LabSurvey, ::testing::Values(1, 2, 3));
+
+// --ceiling H: the room's height is given; the ceiling found is still cut, and the
+// room box (targets and Eq 5) ends at H.
+TEST(Survey, AGivenCeilingHeightIsTheMapsTop) {
+  const json j =
+      survey("given", "--scene " + kScenes + "box-room.scene.json --max-scans 1 --ceiling 2.4");
+  ASSERT_FALSE(j.is_null());
+  ASSERT_EQ(j["scans"].size(), 1u);
+  const json& s = j["scans"][0];
+  EXPECT_TRUE(s["ceiling_found"].get<bool>());
+  EXPECT_EQ(s["ceiling_height_from"], "given");
+  EXPECT_DOUBLE_EQ(s["ceiling_height"].get<double>(), 2.4);
+  ASSERT_TRUE(s["room"].is_object());
+  EXPECT_DOUBLE_EQ(s["room"]["max"][2].get<double>(), 2.4);
+  const auto bad = run_cli("survey --scene " + kScenes + "box-room.scene.json --out " +
+                           (scratch() / "bad-ceiling").string() + " --ceiling -1");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.all().find("--ceiling"), std::string::npos) << bad.all();
+}
 
 TEST(Survey, NextBestViewsCoverMoreThanRandomFeasiblePositions) {
   if (sanitized()) GTEST_SKIP() << "too slow under sanitizers";

@@ -1,15 +1,21 @@
 // The survey stage (include/semioctree/survey.h) driven from the library, with the
 // simulated platform: the order of what it reports, its stop rules, the policy's choice
-// reaching the platform, and a failed registration ending the survey with the map kept.
+// reaching the platform, a failed registration ending the survey with the map kept, and
+// surveys of rooms whose ceiling the scans do not find.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "semioctree/sim/scene.h"
 #include "semioctree/sim_platform/simulated_platform.h"
 #include "semioctree/survey.h"
+#include "support/sample_trees.h"
 
 namespace semioctree {
 namespace {
@@ -166,6 +172,88 @@ TEST(SurveyStage, AFailedRegistrationEndsTheSurveyAndKeepsTheMapOfTheScansBefore
   EXPECT_EQ(survey.records().size(), 1u);
   EXPECT_EQ(survey.map().scanners().size(), 1u);
   EXPECT_STREQ(to_string(outcome.stopped_because), "registration_failed");
+}
+
+// A 6 × 4 m room of walls `wall_height` high with a table, a ceiling slab at `ceiling`
+// (0: none), and the scanner's elevation limit; written as a scene file in a fresh temp
+// dir and read back as `survey --scene` reads it, with a coarse scanner (0.4° steps).
+sim::Scene room_scene(const std::string& name, double wall_height, double ceiling,
+                      double elevation_max_deg) {
+  using nlohmann::json;
+  const json outline = {{-0.2, -0.2}, {6.2, -0.2}, {6.2, 4.2}, {-0.2, 4.2}};
+  json walls = json::array();
+  const double corners[5][2] = {{-0.1, -0.1}, {6.1, -0.1}, {6.1, 4.1}, {-0.1, 4.1}, {-0.1, -0.1}};
+  for (int i = 0; i < 4; ++i)
+    walls.push_back({{"from", {corners[i][0], corners[i][1]}},
+                     {"to", {corners[i + 1][0], corners[i + 1][1]}},
+                     {"z1", wall_height}});
+  json slabs = {{{"polygon", outline}, {"z0", -0.2}, {"z1", 0.0}}};
+  if (ceiling > 0) slabs.push_back({{"polygon", outline}, {"z0", ceiling}, {"z1", ceiling + 0.2}});
+  const json scene = {
+      {"format", "semioctree-scene"},
+      {"version", 1},
+      {"name", name},
+      {"walls", walls},
+      {"slabs", slabs},
+      {"boxes", {{{"center", {4.2, 2.6, 0.375}}, {"size", {1.4, 0.7, 0.75}}, {"name", "table"}}}},
+      {"robot", {{"start", {2.0, 1.5}}}},
+      {"scanner",
+       {{"azimuth_step_deg", 0.4},
+        {"elevation_step_deg", 0.4},
+        {"elevation_max_deg", elevation_max_deg}}}};
+  const std::filesystem::path dir = testing::temp_dir(name);
+  const std::filesystem::path file = dir / (name + ".scene.json");
+  std::ofstream(file) << scene.dump(1);
+  sim::Scene loaded = sim::load_scene(file.string());
+  std::filesystem::remove_all(dir);
+  return loaded;
+}
+
+// The survey of `scene` with the NBV policy, up to 6 scans: it must end by its stop
+// percentage, every scan levelled by its floor alone. Returns the map's height.
+double expect_complete_without_ceiling(const sim::Scene& scene) {
+  SimulatedPlatform platform(scene, 1, 0, false);
+  Survey survey(params_for(scene, 6, 0.1), nullptr);
+  BestScorePolicy nbv;
+  const SurveyOutcome outcome = survey.run(platform, nbv);
+  EXPECT_EQ(outcome.stopped_because, StopReason::kStopPercentage) << outcome.error;
+  if (survey.records().empty()) {
+    ADD_FAILURE() << "no scan";
+    return 0;
+  }
+  std::printf("%s: %zu scans, stop percentage %.3f %%, map height %.2f m\n", scene.name.c_str(),
+              survey.records().size(), survey.records().back().nbv.stop_percent,
+              survey.map().ceiling_height());
+  EXPECT_GE(survey.records().size(), 2u);  // one scan does not see behind the table
+  for (const ScanRecord& r : survey.records()) {
+    EXPECT_FALSE(r.ceiling_found) << "scan " << r.index;
+    EXPECT_EQ(r.height_from, RoomHeightFrom::kPoints) << "scan " << r.index;
+    EXPECT_LT(std::abs(r.tilt_alpha_deg) + std::abs(r.tilt_beta_deg), 0.1) << "scan " << r.index;
+  }
+  // The map's height is the first scan's (the top of its points); the room box ends there.
+  const ScanRecord& first = survey.records().front();
+  EXPECT_DOUBLE_EQ(survey.map().ceiling_height(), first.ceiling_height);
+  EXPECT_TRUE(first.room && first.room->max.z == first.ceiling_height);
+  return survey.map().ceiling_height();
+}
+
+// An open-plan room: walls and a table, no ceiling slab. The scanner sees up to the
+// walls' top (2.8 m) and then nothing.
+TEST(SurveyStage, ASurveyWithoutACeilingRunsToItsStopPercentage) {
+  const sim::Scene scene = room_scene("no-ceiling", 2.8, 0, 90);
+  // The map reaches the walls' top: no band of wall was taken for a ceiling.
+  EXPECT_NEAR(expect_complete_without_ceiling(scene), 2.8, 0.02);
+}
+
+// A hall 5.5 m high whose scanner looks no higher than 30°: from anywhere in the 6 × 4 m
+// room the ceiling (4 m above the scanner, at most 6.5 m away: above 31.5°) is out of
+// view, and the walls are seen up to where that limit cuts them.
+TEST(SurveyStage, AScannerThatCannotSeeTheCeilingSurveysTheRoom) {
+  const sim::Scene scene = room_scene("ceiling-out-of-view", 5.5, 5.5, 30);
+  // The map reaches where that limit cuts the walls, below the ceiling.
+  const double height = expect_complete_without_ceiling(scene);
+  EXPECT_GT(height, 3.0);
+  EXPECT_LT(height, 5.5);
 }
 
 TEST(SurveyStage, RandomPolicyDrawsAmongTheCandidatesReproducibly) {

@@ -37,6 +37,12 @@ class ReturnDirections {
   // and below) counts as having them, so that a bin the scan's angular step happens to
   // skip is no hole.
   void close_gaps();
+  // For a scan open above (no ceiling found: open-plan, an atrium, a ceiling beyond the
+  // scanner's range): every direction above the horizon that lies above the highest
+  // return of its azimuth counts as having returns. Its beam went over everything the
+  // scan saw and met nothing within range: the space along it is free, not hidden.
+  // Below the highest return (a window, a door) a direction without returns stays hidden.
+  void open_above();
   bool has(double dx, double dy, double dz) const;
   std::size_t bins_with_returns() const;
 
@@ -45,9 +51,11 @@ class ReturnDirections {
 };
 
 // The returns of a scan given in the scanner's frame (optical centre at the origin),
-// turned into the map frame by `scanner_to_map` (its translation is ignored), gaps closed.
+// turned into the map frame by `scanner_to_map` (its translation is ignored), gaps closed;
+// with `open_above` (the scan found no ceiling) then opened above (open_above()).
 std::shared_ptr<const ReturnDirections> return_directions(const Cloud& scan,
-                                                          const Eigen::Matrix3d& scanner_to_map);
+                                                          const Eigen::Matrix3d& scanner_to_map,
+                                                          bool open_above = false);
 
 struct ScannerView {
   ScannerView() = default;

@@ -5,12 +5,15 @@
 // the floor at z = 0; a Gaussian fitted to the floor and the ceiling peaks of
 // the z histogram gives σ, and points within 2σ of either are removed (they
 // carry no information for the NBV). Finally the cloud is decimated to a
-// minimum point spacing or a target count.
+// minimum point spacing or a target count. A cloud without a ceiling (open
+// above, or a ceiling the scanner does not reach) is levelled by its floor
+// alone, and the room's height is the top of its points (docs/data-flow.md).
 #pragma once
 
 #include <Eigen/Geometry>
 #include <cstddef>
 #include <stdexcept>
+#include <string>
 
 #include "semioctree/scan_io.h"
 
@@ -30,7 +33,19 @@ struct PreprocessParams {
   double min_spacing = 0.0;           // decimation: minimum point spacing, m (0: off)
   std::size_t target_points = 0;      // decimation: aim for this many points (0: off)
   std::size_t min_points = 1000;      // fewer input points than this is an error
+  // Without a ceiling, the room's height is this quantile of the heights of the points
+  // left after the floor cut (a few stray returns above the room do not raise it).
+  double top_quantile = 0.999;
+  // > 0: the room's height above the floor, m, given (a ceiling found is still cut).
+  double ceiling_height = 0;
 };
+
+// Where PreprocessResult::ceiling_height comes from.
+enum class RoomHeightFrom { kCeiling, kPoints, kGiven };
+const char* to_string(RoomHeightFrom from);  // "ceiling", "points", "given"
+// The room's height in words for progress lines: "ceiling 3.20 m", "no ceiling found,
+// height 2.95 m from the points", ...
+std::string describe_room_height(bool ceiling_found, RoomHeightFrom from, double height);
 
 struct HeightPeak {
   double center = 0;  // z of the Gaussian's mean (levelled frame)
@@ -42,9 +57,13 @@ struct HeightPeak {
 struct PreprocessResult {
   Cloud::Ptr cloud;                    // levelled, floor at z = 0, floor/ceiling removed, decimated
   Eigen::Isometry3d transform;         // input frame → levelled frame
-  double alpha_deg = 0, beta_deg = 0;  // Eq 1 angles of the floor/ceiling normal
+  double alpha_deg = 0, beta_deg = 0;  // Eq 1 angles of the floor's normal
   Eigen::Vector3d normal_input;        // that normal in the input frame (z > 0)
-  double ceiling_height = 0;           // levelled; the floor is at 0
+  bool ceiling_found = false;          // else `ceiling` is all zero and nothing was cut there
+  // The room's height above the floor (the map's top): the ceiling's, else the
+  // top_quantile of the points' heights, or PreprocessParams::ceiling_height when given.
+  double ceiling_height = 0;
+  RoomHeightFrom height_from = RoomHeightFrom::kCeiling;
   HeightPeak floor, ceiling;
   std::size_t input_points = 0;
   std::size_t after_cut = 0;      // after removing floor and ceiling points
@@ -58,8 +77,9 @@ class PreprocessError : public std::runtime_error {
 };
 
 // Throws PreprocessError (with the reason) when the cloud has fewer than
-// params.min_points points, no plane within max_tilt_deg of horizontal, or no
-// floor and ceiling planes at least min_room_height apart.
+// params.min_points points, no plane within max_tilt_deg of horizontal, or
+// neither a ceiling (a horizontal surface at least min_room_height above the
+// floor), a given height nor a point above the floor.
 PreprocessResult preprocess(const Cloud& input, const PreprocessParams& params = {});
 
 // Decimates to a minimum spacing (PCL UniformSampling: one original point per

@@ -50,6 +50,8 @@ struct ScanRecord {
   Eigen::Isometry3d scanner_to_survey = Eigen::Isometry3d::Identity();  // estimated
   std::size_t points_raw = 0, points_kept = 0, points_outside_limits = 0;
   double ceiling_height = 0, tilt_alpha_deg = 0, tilt_beta_deg = 0;  // preprocessing
+  bool ceiling_found = false;  // else levelled by the floor alone (PreprocessResult)
+  RoomHeightFrom height_from = RoomHeightFrom::kCeiling;
   struct Registration {
     RegistrationResult icp;
     double scanner_shift_m = 0;  // how far the correction moved the scanner

@@ -82,14 +82,19 @@ PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& param
     out.scanners.emplace_back(p.x(), p.y(), p.z());
   }
   for (const auto& [points, rotation] : returns)
-    out.returns.push_back(return_directions(*points, out.pre.transform.linear() * rotation));
+    out.returns.push_back(
+        return_directions(*points, out.pre.transform.linear() * rotation, !out.pre.ceiling_found));
   const auto& r = out.pre;
+  char ceiling[64] = "";
+  if (r.ceiling_found)
+    std::snprintf(ceiling, sizeof ceiling, " (ceiling σ %.1f mm, %zu removed)",
+                  1000 * r.ceiling.sigma, r.ceiling.removed);
   std::printf(
-      "preprocess: alpha %.3f°, beta %.3f°; floor σ %.1f mm (%zu removed), ceiling at %.3f m σ "
-      "%.1f mm "
-      "(%zu removed); %zu → %zu points%s [%.2f s]\n",
-      r.alpha_deg, r.beta_deg, 1000 * r.floor.sigma, r.floor.removed, r.ceiling_height,
-      1000 * r.ceiling.sigma, r.ceiling.removed, r.input_points, r.output_points,
+      "preprocess: alpha %.3f°, beta %.3f°; floor σ %.1f mm (%zu removed), %s%s; %zu → %zu "
+      "points%s [%.2f s]\n",
+      r.alpha_deg, r.beta_deg, 1000 * r.floor.sigma, r.floor.removed,
+      describe_room_height(r.ceiling_found, r.height_from, r.ceiling_height).c_str(), ceiling,
+      r.input_points, r.output_points,
       r.decimation_spacing > 0
           ? (" (decimated at " + std::to_string(r.decimation_spacing).substr(0, 6) + " m)").c_str()
           : "",

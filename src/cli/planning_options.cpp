@@ -43,6 +43,10 @@ void add_planning_options(CLI::App& cmd, PlanningOptions& o) {
                "map, as Eq 5 reads when the grid is the room; default: only inside the room the "
                "scans stand in (its walls, floor and ceiling), so that space behind the walls or "
                "seen out of a window does not count");
+  cmd.add_option("--ceiling", o.ceiling,
+                 "ceiling height above the floor, m: the map's top (default: the first scan's "
+                 "ceiling, or without one the top of its points)")
+      ->check(finite_positive(100));
   cmd.add_option("--threads", o.threads, "worker threads (0: one per core; at most 256)")
       ->check(thread_count())
       ->capture_default_str();
@@ -65,6 +69,7 @@ void apply_planning_options(const PlanningOptions& o, SurveyParams& p, bool homo
                            : DiscretizeParams{o.leaf, o.coarse, 0.0};
   p.map.threads = o.threads;
   p.preprocess.target_points = o.target_points;
+  p.preprocess.ceiling_height = o.ceiling;
   p.nbv.method = o.method;
   if (o.level >= 0) p.nbv.level = unsigned(o.level);
   p.nbv.candidate_spacing = o.candidate_spacing;

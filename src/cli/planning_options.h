@@ -1,5 +1,5 @@
 // The options `survey` and `nbv` share: the grid, the NBV, the stop threshold,
-// decimation and threads; and how they fill the survey stage's parameters.
+// decimation, the room's height and threads; and how they fill the survey stage's parameters.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -18,6 +18,7 @@ struct PlanningOptions {
   std::size_t target_points = 400000;
   unsigned threads = 0;
   bool whole_map = false;  // count targets and Eq 5 over the whole map, not the room
+  double ceiling = 0;      // > 0: the room's height above the floor (--ceiling)
 };
 void add_planning_options(CLI::App& cmd, PlanningOptions& o);
 

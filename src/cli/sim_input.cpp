@@ -46,10 +46,13 @@ PreparedCloud scan_scene_at_start(const std::string& scene_path, std::uint64_t s
   for (const auto& p : cloud)
     seen.push_back(pcl::PointXYZ{float(p.x - s.origin().x()), float(p.y - s.origin().y()),
                                  float(p.z - s.origin().z())});
-  out.returns.push_back(return_directions(seen, out.pre.transform.linear()));
-  std::printf("preprocess: floor σ %.1f mm, ceiling at %.3f m, %zu → %zu points [%.2f s]\n",
-              1000 * out.pre.floor.sigma, out.pre.ceiling_height, out.pre.input_points,
-              out.pre.output_points, seconds_since(t1));
+  out.returns.push_back(
+      return_directions(seen, out.pre.transform.linear(), !out.pre.ceiling_found));
+  std::printf(
+      "preprocess: floor σ %.1f mm, %s, %zu → %zu points [%.2f s]\n", 1000 * out.pre.floor.sigma,
+      describe_room_height(out.pre.ceiling_found, out.pre.height_from, out.pre.ceiling_height)
+          .c_str(),
+      out.pre.input_points, out.pre.output_points, seconds_since(t1));
   return out;
 }
 

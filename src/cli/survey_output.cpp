@@ -83,10 +83,11 @@ void SurveyOutput::stage_done(SurveyStage stage, const ScanRecord& s) {
   switch (stage) {
     case SurveyStage::kPreprocessed:
       std::printf(
-          "  preprocess: %zu → %zu points (%zu outside the scanner's limits dropped), ceiling "
-          "%.2f m, tilt α %.2f° β %.2f° [%.2f s]\n",
-          s.points_raw, s.points_kept, s.points_outside_limits, s.ceiling_height, s.tilt_alpha_deg,
-          s.tilt_beta_deg, s.seconds.preprocess);
+          "  preprocess: %zu → %zu points (%zu outside the scanner's limits dropped), %s, tilt "
+          "α %.2f° β %.2f° [%.2f s]\n",
+          s.points_raw, s.points_kept, s.points_outside_limits,
+          describe_room_height(s.ceiling_found, s.height_from, s.ceiling_height).c_str(),
+          s.tilt_alpha_deg, s.tilt_beta_deg, s.seconds.preprocess);
       break;
     case SurveyStage::kRegistered: {
       const RegistrationResult& r = s.registration->icp;
@@ -167,6 +168,9 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
   r["points_raw"] = s.points_raw;
   r["points_kept"] = s.points_kept;
   r["points_outside_limits"] = s.points_outside_limits;
+  r["ceiling_found"] = s.ceiling_found;
+  r["ceiling_height"] = s.ceiling_height;
+  r["ceiling_height_from"] = to_string(s.height_from);
   json volume;
   r["octants"] = octants_json(map.tree(), volume);
   r["volume_percent"] = volume;

@@ -12,12 +12,14 @@
 
 namespace semioctree::testing {
 
-// A w × d × h room: points on floor (z = 0), ceiling (z = h), four walls and a
-// box (a table), with Gaussian noise, seen from (sx, sy, scanner_height).
-// Points are in the scanner frame: the room is shifted by −scanner position.
+// A w × d × h room: points on floor (z = 0), ceiling (z = h; none without
+// `ceiling`), four walls and a box (a table), with Gaussian noise, seen from
+// (sx, sy, scanner_height). Points are in the scanner frame: the room is
+// shifted by −scanner position.
 inline Cloud::Ptr synthetic_room(double w = 8.0, double d = 6.0, double h = 3.0,
                                  double spacing = 0.03, double noise = 0.002, unsigned seed = 1,
-                                 double sx = 3.0, double sy = 2.5, double scanner_height = 1.5) {
+                                 double sx = 3.0, double sy = 2.5, double scanner_height = 1.5,
+                                 bool ceiling = true) {
   Cloud::Ptr c(new Cloud);
   std::mt19937 rng(seed);
   std::normal_distribution<double> n(0.0, noise);
@@ -28,7 +30,7 @@ inline Cloud::Ptr synthetic_room(double w = 8.0, double d = 6.0, double h = 3.0,
   for (double x = 0; x <= w; x += spacing)
     for (double y = 0; y <= d; y += spacing) {
       add(x, y, 0.0);
-      add(x, y, h);
+      if (ceiling) add(x, y, h);
     }
   for (double z = spacing; z < h; z += spacing) {
     for (double x = 0; x <= w; x += spacing) {
