@@ -102,6 +102,21 @@ void ReturnDirections::open_above() {
   }
 }
 
+void ReturnDirections::open_within(const PlatformBody& body, double min_range) {
+  if (!(body.radius > 0) || !(min_range > 0)) return;
+  const DirectionBins& b = direction_bins();
+  for (int r = 0; r < DirectionBins::kRows; ++r) {
+    // Row r spans elevations [lo, hi]; the body is convex and holds the optical centre,
+    // so a segment lies inside it when its far end does, for every elevation of the row.
+    const double lo = (r - 90.0) * M_PI / 180.0, hi = lo + M_PI / 180.0;
+    const double widest = (lo <= 0 && hi >= 0) ? 1.0 : std::max(std::cos(lo), std::cos(hi));
+    const bool inside = min_range * widest <= body.radius &&
+                        min_range * std::sin(hi) <= body.above &&
+                        -min_range * std::sin(lo) <= body.below;
+    if (inside) std::fill_n(bins_.begin() + b.first[r], b.count[r], std::uint8_t(1));
+  }
+}
+
 bool ReturnDirections::has(double dx, double dy, double dz) const {
   const DirectionBins& b = direction_bins();
   const int r = b.row_of(dx, dy, dz);
@@ -114,11 +129,12 @@ std::size_t ReturnDirections::bins_with_returns() const {
 
 std::shared_ptr<const ReturnDirections> return_directions(const Cloud& scan,
                                                           const Eigen::Matrix3d& scanner_to_map,
-                                                          bool open_above) {
+                                                          const ReturnDirectionsOptions& options) {
   auto r = std::make_shared<ReturnDirections>();
   for (const auto& p : scan) r->add(scanner_to_map * Eigen::Vector3d(p.x, p.y, p.z));
   r->close_gaps();
-  if (open_above) r->open_above();
+  if (options.open_above) r->open_above();
+  r->open_within(options.body, options.min_range);
   return r;
 }
 

@@ -137,9 +137,12 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
   if (rec.registration) observer_->stage_done(SurveyStage::kRegistered, rec);
 
   // Stages 3-5 (8 for later scans): occupancy, openings, occlusion.
-  rec.update =
-      map_.add_scan(*registered, scanner, pre.ceiling_height,
-                    return_directions(*seen, rec.scanner_to_survey.linear(), !pre.ceiling_found));
+  ReturnDirectionsOptions returns;
+  returns.open_above = !pre.ceiling_found;
+  returns.body = platform_body(params_.robot, params_.map.grid.leaf);
+  returns.min_range = params_.map.limits.min_range;
+  rec.update = map_.add_scan(*registered, scanner, pre.ceiling_height,
+                             return_directions(*seen, rec.scanner_to_survey.linear(), returns));
   rec.seconds.occupancy = rec.update.seconds_occupancy;
   rec.seconds.openings = rec.update.seconds_openings;
   rec.seconds.occlusion = rec.update.seconds_occlusion;

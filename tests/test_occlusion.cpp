@@ -427,6 +427,87 @@ TEST(Occlusion, SurfaceNearerThanTheMinimumRangeStillHides) {
   EXPECT_EQ(label_at(*tree, Point3(2.0, 3.0, 1.4)), Label::kEmpty);  // returns from y = 4
 }
 
+// The platform's body opens the directions whose segment to the minimum range it holds:
+// all of them down to its floor clearance and up to its top when it is as wide as the
+// minimum range; only the steep ones below when it is narrower.
+TEST(Occlusion, ReturnDirectionsOpenWithinThePlatformsBody) {
+  const auto deg = [](double e_deg) {
+    const double e = e_deg * M_PI / 180;
+    return Eigen::Vector3d(std::cos(e), 0, std::sin(e));
+  };
+  PlatformBody wide;
+  wide.radius = 0.6, wide.below = 1.45, wide.above = 0.1;
+  ReturnDirections r;
+  r.open_within(wide, 0.6);
+  for (double e : {-89.5, -60.0, -30.0, -0.5, 0.5, 8.5})
+    EXPECT_TRUE(r.has(deg(e).x(), deg(e).y(), deg(e).z())) << e;
+  for (double e : {10.5, 45.0, 89.5})  // above the top: a beam or a low ceiling may be there
+    EXPECT_FALSE(r.has(deg(e).x(), deg(e).y(), deg(e).z())) << e;
+
+  PlatformBody narrow = wide;  // 0.6 · cos e ≤ 0.3 from e = −60° down
+  narrow.radius = 0.3;
+  ReturnDirections n;
+  n.open_within(narrow, 0.6);
+  EXPECT_TRUE(n.has(deg(-61.5).x(), 0, deg(-61.5).z()));
+  EXPECT_FALSE(n.has(deg(-58.5).x(), 0, deg(-58.5).z()));
+  EXPECT_FALSE(n.has(1, 0, 0));
+
+  PlatformBody low = wide;  // floor clearance 0.3 under the optical centre
+  low.below = 0.3;
+  ReturnDirections l;
+  l.open_within(low, 0.6);
+  EXPECT_TRUE(l.has(deg(-28.5).x(), 0, deg(-28.5).z()));
+  EXPECT_FALSE(l.has(deg(-31.5).x(), 0, deg(-31.5).z()));
+
+  ReturnDirections none;
+  none.open_within(PlatformBody{}, 0.6);
+  EXPECT_EQ(none.bins_with_returns(), 0u);
+}
+
+// A closed room with a window 3 m in front of the scanner and nothing beyond it: the
+// directions through the window get no returns. From a tripod (no body known) the space
+// between the scanner and the window stays hidden: a surface nearer than the minimum range
+// could have blocked those beams. A robot 0.6 m wide holds that space itself, so the beams
+// met nothing within range: the space is seen.
+TEST(Occlusion, NoReturnsThroughAWindowHideNothingFromAPlatformAsWideAsTheMinimumRange) {
+  const Point3 scanner(1.0, 2.0, 1.2);
+  Cloud world, seen;
+  auto add = [&](double x, double y, double z) {
+    world.push_back(pcl::PointXYZ{float(x), float(y), float(z)});
+    seen.push_back(pcl::PointXYZ{float(x - scanner.x), float(y - scanner.y), float(z - scanner.z)});
+  };
+  for (double u = 0.01; u < 4; u += 0.02)
+    for (double z = 0.01; z < 2.4; z += 0.02) {
+      const bool window = u > 1.4 && u < 2.6 && z > 0.8 && z < 1.8;
+      add(0.01, u, z), add(u, 0.01, z), add(u, 3.99, z);
+      if (!window) add(3.99, u, z);
+    }
+  add(5.9, 5.9, 0.01);  // the map reaches beyond the window
+  const Point3 before_window(2.5, 2.0, 1.3), beside(2.5, 0.8, 1.3);
+
+  PlatformBody robot;
+  robot.radius = 0.6, robot.below = 1.15, robot.above = 0.1;
+  auto study = [&](const PlatformBody& body) {
+    auto tree = discretize(world, 2.4, {0.05, 0.8});
+    ReturnDirectionsOptions options;
+    options.body = body;
+    options.min_range = 0.6;
+    ScannerView view{scanner};
+    view.returns = return_directions(seen, Eigen::Matrix3d::Identity(), options);
+    study_occlusion(*tree, {view});
+    return tree;
+  };
+  const auto tripod = study(PlatformBody{});
+  EXPECT_EQ(label_at(*tripod, before_window), Label::kOccluded);
+  EXPECT_EQ(label_at(*tripod, beside), Label::kEmpty);
+  const auto wide = study(robot);
+  EXPECT_EQ(label_at(*wide, before_window), Label::kEmpty);
+  EXPECT_EQ(label_at(*wide, beside), Label::kEmpty);
+  robot.radius = 0.3;  // narrower than the minimum range: still hidden
+  const auto narrow = study(robot);
+  EXPECT_EQ(label_at(*narrow, before_window), Label::kOccluded);
+}
+
 // The same wall 0.4 m from the scanner, in an OctoMap map made by casting the scan's rays
 // (insertPointCloud), as map-nbv reads one: the directions with returns are those whose
 // ray, through the free space the map holds, reaches an occupied leaf. Towards the hole

@@ -463,6 +463,35 @@ TEST(Survey, AGivenCeilingHeightIsTheMapsTop) {
   EXPECT_NE(bad.all().find("--ceiling"), std::string::npos) << bad.all();
 }
 
+// The platform options replace the scene's robot and scanner: the scans are taken at the
+// height given and within the limits given, and survey.json says what was used.
+TEST(Survey, PlatformOptionsReplaceTheScenesRobotAndScanner) {
+  const json j = survey("platform", "--scene " + kScenes +
+                                        "box-room.scene.json --max-scans 1 --no-coverage "
+                                        "--robot-radius 0.35 --scanner-height 1.1 "
+                                        "--elevation-min -45 --elevation-max 70 --min-range 0.8");
+  ASSERT_FALSE(j.is_null());
+  const json& p = j["platform"];
+  EXPECT_DOUBLE_EQ(p["robot_radius"].get<double>(), 0.35);
+  EXPECT_DOUBLE_EQ(p["scanner_height"].get<double>(), 1.1);
+  EXPECT_DOUBLE_EQ(p["elevation_min_deg"].get<double>(), -45);
+  EXPECT_DOUBLE_EQ(p["elevation_max_deg"].get<double>(), 70);
+  EXPECT_DOUBLE_EQ(p["min_range"].get<double>(), 0.8);
+  ASSERT_EQ(j["scans"].size(), 1u);
+  // The scanner found its floor 1.1 m below it (the scene's scanner stands at 1.5 m).
+  EXPECT_NEAR(j["scans"][0]["pose"]["z"].get<double>(), 1.1, 0.02) << j["scans"][0];
+
+  for (const std::string bad :
+       {"--elevation-min 30 --elevation-max 20", "--min-range 5 --max-range 4", "--robot-radius 0",
+        "--scanner-height nan", "--elevation-max 91"}) {
+    const auto r = run_cli("survey --scene " + kScenes + "box-room.scene.json --out " +
+                           (scratch() / "bad-platform").string() + " " + bad);
+    EXPECT_NE(r.exit_code, 0) << bad;
+    const std::string option = bad.substr(0, bad.find(' '));
+    EXPECT_NE(r.all().find(option), std::string::npos) << bad << ": " << r.all();
+  }
+}
+
 TEST(Survey, NextBestViewsCoverMoreThanRandomFeasiblePositions) {
   if (sanitized()) GTEST_SKIP() << "too slow under sanitizers";
   // The same number of scans (3; never stopping early) chosen by the NBV or at

@@ -18,6 +18,13 @@
 
 namespace semioctree {
 
+// The space around a scanner that only its platform occupies: a vertical cylinder about
+// the optical centre's axis, `radius` wide, from `below` under the optical centre to
+// `above` over it (a robot's safety cylinder above its ground clearance). All 0: none.
+struct PlatformBody {
+  double radius = 0, below = 0, above = 0;  // m
+};
+
 // The directions in which a scan got returns, seen from its optical centre in the map
 // frame: rows of 1° of elevation, each cut into bins about 1° wide (fewer towards the
 // poles, so that every bin spans about 1° × 1° and a sparse scan fills the rows near
@@ -43,6 +50,14 @@ class ReturnDirections {
   // scan saw and met nothing within range: the space along it is free, not hidden.
   // Below the highest return (a window, a door) a direction without returns stays hidden.
   void open_above();
+  // For a scan taken from a platform: every direction whose segment from the optical
+  // centre to `min_range` lies inside `body` counts as having returns. Only the platform
+  // occupies its body (and the elevation limits keep the scanner's beam off the
+  // platform), so no surface can lie nearer than the minimum range there: a direction
+  // without returns met nothing within the maximum range (an opening, the open sky),
+  // and the space along it is free, not hidden. A body narrower than the minimum range
+  // opens only the steep directions it holds (docs/occlusion.md).
+  void open_within(const PlatformBody& body, double min_range);
   bool has(double dx, double dy, double dz) const;
   std::size_t bins_with_returns() const;
 
@@ -50,12 +65,25 @@ class ReturnDirections {
   std::vector<std::uint8_t> bins_;
 };
 
+// How return_directions completes the directions of a scan.
+struct ReturnDirectionsOptions {
+  bool open_above = false;  // the scan found no ceiling: open_above()
+  PlatformBody body;        // the platform it was taken from: open_within(body, min_range)
+  double min_range = 0.6;   // the scanner's minimum range, m
+};
+// Options with only open_above set: a scan whose platform is not known (a tripod, a file).
+inline ReturnDirectionsOptions open_above_if(bool open_above) {
+  ReturnDirectionsOptions o;
+  o.open_above = open_above;
+  return o;
+}
+
 // The returns of a scan given in the scanner's frame (optical centre at the origin),
-// turned into the map frame by `scanner_to_map` (its translation is ignored), gaps closed;
-// with `open_above` (the scan found no ceiling) then opened above (open_above()).
-std::shared_ptr<const ReturnDirections> return_directions(const Cloud& scan,
-                                                          const Eigen::Matrix3d& scanner_to_map,
-                                                          bool open_above = false);
+// turned into the map frame by `scanner_to_map` (its translation is ignored), gaps closed,
+// then opened as `options` say.
+std::shared_ptr<const ReturnDirections> return_directions(
+    const Cloud& scan, const Eigen::Matrix3d& scanner_to_map,
+    const ReturnDirectionsOptions& options = {});
 
 struct ScannerView {
   ScannerView() = default;

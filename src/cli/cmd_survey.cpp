@@ -59,6 +59,9 @@ struct SurveyOptions {
   // candidate that adds the most surface, known from the scene (the yardstick).
   std::string policy = "nbv";
   std::vector<double> start;  // X,Y: replaces the scene's robot start
+  // Replace the scene's platform (unset: the scene's values).
+  std::optional<double> robot_radius, scanner_height, elevation_min, elevation_max, min_range,
+      max_range;
   std::string cache;
   bool skip_coverage = false;
 };
@@ -161,6 +164,33 @@ nlohmann::json coverage_summary(const sim::GroundTruth& truth, const sim::Covera
             {"parts", parts}}}};
 }
 
+// The platform options replace the scene's robot and scanner values; the ranges each
+// option takes are checked by CLI11, the pairs here.
+void apply_platform_options(const SurveyOptions& o, sim::Scene& scene) {
+  sim::ScannerConfig& s = scene.scanner;
+  if (o.robot_radius) scene.robot.radius = *o.robot_radius;
+  if (o.scanner_height) s.height = *o.scanner_height;
+  if (o.elevation_min) s.elevation_min_deg = *o.elevation_min;
+  if (o.elevation_max) s.elevation_max_deg = *o.elevation_max;
+  if (o.min_range) s.min_range = *o.min_range;
+  if (o.max_range) s.max_range = *o.max_range;
+  char m[200];
+  if (!(s.elevation_max_deg > s.elevation_min_deg)) {
+    std::snprintf(m, sizeof m,
+                  "--elevation-max (%g°) must be above --elevation-min (%g°), scene's values "
+                  "where not given",
+                  s.elevation_max_deg, s.elevation_min_deg);
+    throw std::invalid_argument(m);
+  }
+  if (!(s.max_range > s.min_range)) {
+    std::snprintf(m, sizeof m,
+                  "--max-range (%g m) must be above --min-range (%g m), scene's values where "
+                  "not given",
+                  s.max_range, s.min_range);
+    throw std::invalid_argument(m);
+  }
+}
+
 void run_survey(const SurveyOptions& o) {
   const auto t_start = Clock::now();
   if (o.policy == "oracle" && o.skip_coverage)
@@ -176,7 +206,8 @@ void run_survey(const SurveyOptions& o) {
     if (o.start.size() != 2) throw std::invalid_argument("--start: expected X,Y (2 numbers)");
     start_override = Eigen::Vector2d(o.start[0], o.start[1]);
   }
-  const sim::Scene scene = sim::load_scene(o.scene, start_override);
+  sim::Scene scene = sim::load_scene(o.scene, start_override);
+  apply_platform_options(o, scene);
   const sim::GroundTruth truth(scene);
   const Eigen::Vector2d start = scene.robot.start;
   const sim::FloorPlan plan = truth.floor_plan(0.05);
@@ -302,6 +333,28 @@ void add_survey_command(CLI::App& app) {
       ->delimiter(',')
       ->expected(2)
       ->check(finite_in(-sim::kMaxSceneNumber, sim::kMaxSceneNumber));
+  cmd->add_option("--robot-radius", o->robot_radius,
+                  "radius of the robot's safety cylinder, m (default: the scene's robot.radius)")
+      ->check(finite_positive(100));
+  cmd->add_option("--scanner-height", o->scanner_height,
+                  "height of the scanner's optical centre above the floor, m (default: the "
+                  "scene's scanner.height)")
+      ->check(finite_positive(100));
+  cmd->add_option("--elevation-min", o->elevation_min,
+                  "the scanner's lowest elevation, degrees from horizontal (default: the scene's "
+                  "scanner.elevation_min_deg)")
+      ->check(finite_in(-90, 90));
+  cmd->add_option("--elevation-max", o->elevation_max,
+                  "the scanner's highest elevation, degrees (default: the scene's "
+                  "scanner.elevation_max_deg)")
+      ->check(finite_in(-90, 90));
+  cmd->add_option("--min-range", o->min_range,
+                  "the scanner's minimum range, m: nearer surfaces give no returns (default: the "
+                  "scene's scanner.min_range)")
+      ->check(finite_positive(1000));
+  cmd->add_option("--max-range", o->max_range,
+                  "the scanner's maximum range, m (default: the scene's scanner.max_range)")
+      ->check(finite_positive(1e4));
   cmd->add_option("--cache", o->cache,
                   "directory of cached coverage references (default: $XDG_CACHE_HOME/semioctree "
                   "or ~/.cache/semioctree)");

@@ -47,7 +47,7 @@ PreparedCloud scan_scene_at_start(const std::string& scene_path, std::uint64_t s
     seen.push_back(pcl::PointXYZ{float(p.x - s.origin().x()), float(p.y - s.origin().y()),
                                  float(p.z - s.origin().z())});
   out.returns.push_back(
-      return_directions(seen, out.pre.transform.linear(), !out.pre.ceiling_found));
+      return_directions(seen, out.pre.transform.linear(), open_above_if(!out.pre.ceiling_found)));
   std::printf(
       "preprocess: floor σ %.1f mm, %s, %zu → %zu points [%.2f s]\n", 1000 * out.pre.floor.sigma,
       describe_room_height(out.pre.ceiling_found, out.pre.height_from, out.pre.ceiling_height)

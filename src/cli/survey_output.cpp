@@ -229,6 +229,13 @@ void SurveyOutput::write_survey_json(const std::string& stopped_because, const j
             {"coarse", params_.map.grid.coarse},
             {"stop_threshold_percent", params_.stop_percent},
             {"method", params_.nbv.method},
+            {"platform",
+             {{"robot_radius", params_.robot.radius},
+              {"scanner_height", params_.robot.scanner_height},
+              {"elevation_min_deg", params_.map.limits.elevation_min_deg},
+              {"elevation_max_deg", params_.map.limits.elevation_max_deg},
+              {"min_range", params_.map.limits.min_range},
+              {"max_range", params_.map.limits.max_range}}},
             {"stopped_because", stopped_because},
             // Only the stop percentage says the room is done; the other reasons leave
             // occluded space that the NBV (if any) would still reveal.

@@ -140,6 +140,14 @@ double floor_layer_clearance(const RobotGeometry& robot, double leaf_size) {
   return std::max(robot.ground_clearance, leaf_size);
 }
 
+PlatformBody platform_body(const RobotGeometry& robot, double leaf_size) {
+  PlatformBody body;
+  body.radius = robot.radius;
+  body.below = robot.scanner_height - floor_layer_clearance(robot, leaf_size);
+  body.above = robot.top_margin;
+  return body;
+}
+
 std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry& robot,
                                     const Point3& robot_position,
                                     const std::vector<Point3>& past_scans, const NbvParams& params,

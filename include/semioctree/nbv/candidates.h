@@ -35,6 +35,10 @@ struct CandidateReport {
 // not > 0 (then nothing is driven over).
 double floor_layer_clearance(const RobotGeometry& robot, double leaf_size);
 
+// The robot's body around its scanner, for ReturnDirections::open_within: its safety
+// cylinder from the floor-layer clearance up to its top.
+PlatformBody platform_body(const RobotGeometry& robot, double leaf_size);
+
 // Feasible candidate positions (scanner positions, z = scanner height), in grid
 // order (y, then x). `robot_position`: the robot on the floor (z ignored);
 // `past_scans`: optical centres of the scans so far (their blind zones). Uses
