@@ -139,7 +139,7 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
   // Stages 3-5 (8 for later scans): occupancy, openings, occlusion.
   ReturnDirectionsOptions returns;
   returns.open_above = !pre.ceiling_found;
-  returns.body = platform_body(params_.robot, params_.map.grid.leaf);
+  if (in.from_robot) returns.body = platform_body(params_.robot, params_.map.grid.leaf);
   returns.min_range = params_.map.limits.min_range;
   rec.update = map_.add_scan(*registered, scanner, pre.ceiling_height,
                              return_directions(*seen, rec.scanner_to_survey.linear(), returns));

@@ -42,6 +42,10 @@ struct IncomingScan {
   // (0: no bound).
   double max_correction_m = 0, max_correction_deg = 0;
   std::size_t points_raw = 0;  // before invalid points were dropped (0: points->size())
+  // Taken from the robot of SurveyParams::robot: nothing but the robot stood within its
+  // safety cylinder, so directions without returns that the cylinder holds up to the
+  // minimum range are open (ReturnDirections::open_within). false: a tripod or unknown.
+  bool from_robot = true;
 };
 
 // What the survey did with one scan; filled stage by stage (SurveyObserver::stage_done).

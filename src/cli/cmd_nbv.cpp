@@ -28,7 +28,8 @@ struct NbvOptions {
   std::string out;
   PlanningOptions plan;
   double robot_radius = 0.5;
-  double scanner_height = -1;  // < 0: the first scan's optical centre above the floor
+  bool scanned_by_robot = false;  // ReturnDirections::open_within with the robot's body
+  double scanner_height = -1;     // < 0: the first scan's optical centre above the floor
   ScannerView limits;
 };
 
@@ -100,6 +101,7 @@ void run_nbv(const NbvOptions& o) {
     in.y = posed ? s.pose.position().y() : 0.0;
     in.yaw_deg = posed ? s.pose.yaw_deg() : 0.0;
     in.registered = !posed;
+    in.from_robot = o.scanned_by_robot;
     try {
       output->scan_done(survey->add_scan(in), survey->map());
     } catch (const RegistrationError& e) {
@@ -164,6 +166,12 @@ void add_nbv_command(CLI::App& app) {
   cmd->add_option("--scanner-height", o->scanner_height,
                   "scanner optical centre above the floor, m (default: from the first scan)")
       ->check(finite_positive(100));
+  cmd->add_flag("--scanned-by-robot", o->scanned_by_robot,
+                "the scans were taken from the robot of --robot-radius and --scanner-height: "
+                "nothing but the robot stood within its radius, so a direction without returns "
+                "that its body holds up to --min-range met nothing within range (space seen, "
+                "not hidden). Without it (a tripod, or not known) every direction without "
+                "returns stays hidden");
   add_scanner_limit_options(*cmd, o->limits);
   cmd->callback([o] { run_nbv(*o); });
 }
