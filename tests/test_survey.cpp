@@ -492,6 +492,27 @@ TEST(Survey, PlatformOptionsReplaceTheScenesRobotAndScanner) {
   }
 }
 
+// A robot as wide as the scanner's minimum range (0.6 m) used to stop after its first scan
+// ("no feasible candidate"): the beams through the window 2 m away got no returns, and the
+// hidden wedges they left began at the blind sphere's edge, inside the robot's reach. Its
+// own body holds no surface, so those beams met nothing within range (docs/occlusion.md).
+TEST(Survey, ARobotAsWideAsTheMinimumRangeLeavesItsFirstPosition) {
+  for (const std::string radius : {"0.6", "0.9"}) {
+    const json j = survey("wide" + radius, "--scene " + kScenes +
+                                               "one-door-window.scene.json --max-scans 2 "
+                                               "--no-coverage --robot-radius " +
+                                               radius);
+    ASSERT_FALSE(j.is_null());
+    ASSERT_EQ(j["scans"].size(), 2u) << radius << ": " << j["stopped_because"];
+    const json& nbv = j["scans"][0]["nbv"];
+    ASSERT_TRUE(nbv.is_object()) << radius;
+    // The second scan stands where the robot fits: more than its radius from the walls
+    // (the east wall's door lets it nose into the doorway).
+    const double x = j["scans"][1]["true_pose"]["x"], y = j["scans"][1]["true_pose"]["y"];
+    EXPECT_GT(std::min({x, y, 4.0 - y}), std::stod(radius)) << radius << " at " << x << ", " << y;
+  }
+}
+
 TEST(Survey, NextBestViewsCoverMoreThanRandomFeasiblePositions) {
   if (sanitized()) GTEST_SKIP() << "too slow under sanitizers";
   // The same number of scans (3; never stopping early) chosen by the NBV or at
