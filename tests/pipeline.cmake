@@ -32,6 +32,7 @@ if(TARGET test_figures)
 endif()
 # The survey stage from the library, with the simulated platform.
 if(TARGET semioctree_sim_platform)
+  semioctree_add_test(test_opening_match SOURCES test_opening_match.cpp LIBS semioctree_sim_platform)
   semioctree_add_test(test_survey_stage SOURCES test_survey_stage.cpp
                       LIBS semioctree_sim_platform nlohmann_json::nlohmann_json)
   target_include_directories(test_survey_stage PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
