@@ -115,7 +115,7 @@ TEST(SceneGenerator, ScenesKeepTheRanges) {
     EXPECT_GE(s.scanner.elevation_max_deg, 30.0);
     EXPECT_LE(s.scanner.elevation_max_deg, 90.0);
     EXPECT_GE(s.scanner.azimuth_step_deg, 0.1);
-    EXPECT_LE(s.scanner.azimuth_step_deg, 0.2);
+    EXPECT_LE(s.scanner.azimuth_step_deg, 0.15);
   }
   // The seeds vary what they should.
   EXPECT_EQ(kinds, (std::set<std::string>{"room", "l-shape", "hall"}));

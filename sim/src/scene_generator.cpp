@@ -378,7 +378,7 @@ void Generator::make_outside_and_slabs() {
     for (std::size_t i = 0; i < n; ++i)
       roof[i] = p[i] + t * (outward((i + n - 1) % n) + outward(i));
     slabs.push_back(
-        {{"_", "ceiling"}, {"polygon", polygon_json(roof)}, {"z0", height}, {"z1", height + 0.2}});
+        {{"_", "ceiling"}, {"polygon", polygon_json(roof)}, {"z0", height}, {"z1", mm(height + 0.2)}});
   }
 }
 
@@ -549,11 +549,11 @@ json Generator::make_robot() {
 }
 
 json Generator::make_scanner() {
-  // Angular step: about 4 cm between neighbouring points on the far side of the room
-  // (its diagonal), between 0.1° and 0.2°.
+  // Angular step: about 3 cm between neighbouring rays at the far side of the room (its
+  // diagonal), kept between 0.1° and 0.15° (5.4 to 2.4 million rays a scan).
   const double diagonal = std::hypot(room.width, room.depth);
   const double step =
-      std::round(std::clamp(0.04 / diagonal * 180.0 / M_PI, 0.1, 0.2) * 100.0) / 100.0;
+      std::round(std::clamp(0.03 / diagonal * 180.0 / M_PI, 0.1, 0.15) * 100.0) / 100.0;
   const double el_min = mm(draw.real(-90, -30)), el_max = mm(draw.real(30, 90));
   return {{"height", scanner_height},
           {"azimuth_step_deg", step},
