@@ -2,13 +2,13 @@
 // scene of a seed (sim/include/semioctree/sim/scene_generator.h) to a file.
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <stdexcept>
 #include <string>
 
 #include "commands.h"
 #include "option_checks.h"
+#include "semioctree/octomap_ext/file_io.h"
 #include "semioctree/sim/scene.h"
 #include "semioctree/sim/scene_generator.h"
 
@@ -36,11 +36,9 @@ void run_make_scene(const MakeSceneOptions& o) {
   const std::string text = sim::generate_scene_json(o.seed, kind);
   // What is written is what the reader accepts: a generator bug is reported, not saved.
   const sim::Scene scene = sim::parse_scene_json(text, o.out, ".");
-  std::ofstream file(o.out, std::ios::binary | std::ios::trunc);
-  if (!file) throw std::runtime_error(o.out + ": cannot open for writing");
-  file << text;
-  file.close();
-  if (!file) throw std::runtime_error(o.out + ": write failed");
+  const fs::path dir = fs::path(o.out).parent_path();
+  remove_stale_temporaries(dir.empty() ? "." : dir.string());
+  write_file_atomically(o.out, [&](std::ostream& file) { file << text; });
   std::size_t doors = 0, windows = 0;
   for (const sim::Wall& w : scene.walls)
     for (const sim::Opening& op : w.openings)
