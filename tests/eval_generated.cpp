@@ -82,6 +82,11 @@ SceneResult evaluate(std::uint64_t seed, sim::GeneratedKind asked, const Options
     j["robot_radius"] = scene.robot.radius;
     j["scanner_height"] = scene.scanner.height;
     j["room_height"] = scene.walls.front().z1;
+    j["elevation_deg"] = {scene.scanner.elevation_min_deg, scene.scanner.elevation_max_deg};
+    bool ceiling = false;
+    for (const sim::Slab& slab : scene.slabs)
+      ceiling = ceiling || slab.z0 == scene.walls.front().z1;
+    j["ceiling"] = ceiling;
     const sim::GroundTruth truth(scene);
     const sim::FloorPlan plan = truth.floor_plan(0.05);
     if (!plan.in_survey_area(scene.robot.start) || !truth.standing_free(scene.robot.start))
@@ -101,8 +106,16 @@ SceneResult evaluate(std::uint64_t seed, sim::GeneratedKind asked, const Options
     if (!outcome.error.empty()) j["error"] = outcome.error;
     j["scans"] = survey.records().size();
     r.finished = outcome.stopped_because == StopReason::kStopPercentage;
-    if (!survey.records().empty() && survey.records().back().stop_percent())
-      j["stop_percent"] = *survey.records().back().stop_percent();
+    if (!survey.records().empty()) {
+      const ScanRecord& last = survey.records().back();
+      if (last.stop_percent()) j["stop_percent"] = *last.stop_percent();
+      const CandidateReport& c = last.nbv.candidate_report;  // why none was feasible
+      j["last_candidates"] = {{"grid_points", c.grid_points},
+                              {"not_empty", c.not_empty},
+                              {"cylinder_blocked", c.cylinder_blocked},
+                              {"unreachable", c.unreachable},
+                              {"feasible", c.feasible}};
+    }
 
     const sim::CoverageReference ref = sim::load_or_compute_coverage_reference(
         truth, o.cache.empty() ? sim::default_cache_dir() : o.cache, 0.5, 0.02, o.threads);
