@@ -5,14 +5,17 @@ semioctree_add_test(test_raycaster SOURCES ${PROJECT_SOURCE_DIR}/tests/test_rayc
 semioctree_add_test(test_scanner SOURCES ${PROJECT_SOURCE_DIR}/tests/test_scanner.cpp LIBS semioctree_sim)
 semioctree_add_test(test_robot SOURCES ${PROJECT_SOURCE_DIR}/tests/test_robot.cpp LIBS semioctree_sim)
 semioctree_add_test(test_ground_truth SOURCES ${PROJECT_SOURCE_DIR}/tests/test_ground_truth.cpp LIBS semioctree_sim)
+semioctree_add_test(test_scene_generator SOURCES ${PROJECT_SOURCE_DIR}/tests/test_scene_generator.cpp
+  LIBS semioctree_sim)
 # The CLI tests in test_scene and test_scanner run the built tool.
 if(TARGET semioctree_cli)
   add_dependencies(test_scene semioctree_cli)
   add_dependencies(test_scanner semioctree_cli)
+  add_dependencies(test_scene_generator semioctree_cli)
 endif()
 semioctree_add_bench(bench_raycast SOURCES ${PROJECT_SOURCE_DIR}/tests/bench_raycast.cpp LIBS semioctree_sim)
 # Shared test helpers (tests/support/).
-foreach(t test_scene test_scanner)
+foreach(t test_scene test_scanner test_scene_generator)
   target_include_directories(${t} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
 endforeach()
 # Coverage (sim/src/coverage/): one test per module; test scenes in tests/support/coverage_scenes.h.

@@ -32,7 +32,23 @@ if(TARGET test_figures)
 endif()
 # The survey stage from the library, with the simulated platform.
 if(TARGET semioctree_sim_platform)
+  semioctree_add_test(test_opening_match SOURCES test_opening_match.cpp LIBS semioctree_sim_platform)
   semioctree_add_test(test_survey_stage SOURCES test_survey_stage.cpp
                       LIBS semioctree_sim_platform nlohmann_json::nlohmann_json)
   target_include_directories(test_survey_stage PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+endif()
+# Surveys of generated scenes (eval_generated, a benchmark-style program printing JSON), and
+# a subset of them as a test with the acceptance thresholds (docs/generated-scenes.md).
+# Built with the benchmarks only: the sanitizer build of CI, which has none, skips the test.
+if(TARGET semioctree_sim_platform)
+  semioctree_add_bench(eval_generated SOURCES eval_generated.cpp
+                       ${PROJECT_SOURCE_DIR}/src/cli/planning_options.cpp
+                       LIBS semioctree_sim_platform nlohmann_json::nlohmann_json)
+  if(TARGET eval_generated)
+    target_include_directories(eval_generated PRIVATE ${PROJECT_SOURCE_DIR}/src/cli)
+    add_test(NAME generated_scenes
+             COMMAND eval_generated --kind room --seeds 1-8 --check
+                     --cache ${CMAKE_BINARY_DIR}/coverage-cache)
+    set_tests_properties(generated_scenes PROPERTIES LABELS slow TIMEOUT 1800)
+  endif()
 endif()

@@ -20,6 +20,7 @@
 #include "semioctree/sim/raycaster.h"
 #include "semioctree/sim/scanner.h"
 #include "semioctree/sim/scene.h"
+#include "semioctree/sim_platform/opening_match.h"
 #include "support/lab_scan.h"
 
 namespace semioctree {
@@ -76,31 +77,11 @@ Rect2 rect_along(const std::array<Vec3, 4>& corners, const Vec3& u) {
   }
   return r;
 }
-double iou(const Rect2& a, const Rect2& b) {
-  const double w = std::max(0.0, std::min(a.u1, b.u1) - std::max(a.u0, b.u0));
-  const double h = std::max(0.0, std::min(a.z1, b.z1) - std::max(a.z0, b.z0));
-  const double inter = w * h;
-  const double uni = (a.u1 - a.u0) * (a.z1 - a.z0) + (b.u1 - b.u0) * (b.z1 - b.z0) - inter;
-  return uni > 0 ? inter / uni : 0.0;
-}
-
 Vec3 centre(const DetectedOpening& o) {
   return 0.25 * (o.corners[0] + o.corners[1] + o.corners[2] + o.corners[3]);
 }
 
-// IoU of a detected opening with a ground-truth one in the latter's wall plane
-// (`to_frame`: world → the detection's frame); 0 for another kind or wall.
-double match_iou(const DetectedOpening& d, const sim::OpeningRect& g,
-                 const Eigen::Isometry3d& to_frame) {
-  const bool same_kind = (d.kind == OpeningKind::kDoor) == (g.kind == sim::OpeningKind::door);
-  if (!same_kind || std::abs(d.wall_normal.dot(g.normal)) < 0.95) return 0.0;
-  std::array<Vec3, 4> gl;
-  for (int k = 0; k < 4; ++k) gl[k] = to_frame * g.corners[k];
-  const Vec3 gc = 0.25 * (gl[0] + gl[1] + gl[2] + gl[3]);
-  if (std::abs((centre(d) - gc).dot(g.normal)) > 0.3) return 0.0;  // another wall
-  const Vec3 u = (gl[1] - gl[0]).normalized();
-  return iou(rect_along(d.corners, u), rect_along(gl, u));
-}
+using sim_platform::opening_iou;  // IoU in the true opening's wall plane
 
 TEST(Openings, FindsDoorAndWindowWithTheirSizes) {
   std::mt19937 rng(7);
@@ -264,7 +245,7 @@ TEST(Openings, LabSceneFromStartMatchesGroundTruth) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
     auto match = [&](const DetectedOpening& d, const sim::OpeningRect& g) {
-      return match_iou(d, g, pre.transform);
+      return opening_iou(d, g, pre.transform);
     };
     LabRun run;
     std::printf(
@@ -398,12 +379,12 @@ TEST_P(OccupancyMapOfTheLab, FromItsStartAllFourOpeningsAreFound) {
   const Eigen::Isometry3d world = Eigen::Isometry3d::Identity();
   for (const sim::OpeningRect& g : gt) {
     double best = 0;
-    for (const DetectedOpening& d : found) best = std::max(best, match_iou(d, g, world));
+    for (const DetectedOpening& d : found) best = std::max(best, opening_iou(d, g, world));
     EXPECT_GE(best, 0.7) << sim::to_string(g.kind) << " of wall " << g.wall;
   }
   for (const DetectedOpening& d : found) {
     double best = 0;
-    for (const sim::OpeningRect& g : gt) best = std::max(best, match_iou(d, g, world));
+    for (const sim::OpeningRect& g : gt) best = std::max(best, opening_iou(d, g, world));
     const Vec3 c = centre(d);
     std::printf("  %s at (%.2f, %.2f, %.2f) %.2f x %.2f, sill %.2f, LOS %.2f, IoU %.3f\n",
                 to_string(d.kind), c.x(), c.y(), c.z(), d.width, d.height, d.sill, d.los_fraction,

@@ -18,6 +18,7 @@ void add_map_nbv_command(CLI::App& app);
 #ifdef SEMIOCTREE_HAVE_SIM
 void add_scan_command(CLI::App& app);
 void add_scene_info_command(CLI::App& app);
+void add_make_scene_command(CLI::App& app);
 void add_survey_command(CLI::App& app);
 void add_coverage_bound_command(CLI::App& app);
 #endif

@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
 #ifdef SEMIOCTREE_HAVE_SIM
   semioctree::cli::add_scan_command(app);
   semioctree::cli::add_scene_info_command(app);
+  semioctree::cli::add_make_scene_command(app);
   semioctree::cli::add_survey_command(app);
   semioctree::cli::add_coverage_bound_command(app);
 #endif
