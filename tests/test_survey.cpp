@@ -513,6 +513,25 @@ TEST(Survey, ARobotAsWideAsTheMinimumRangeLeavesItsFirstPosition) {
   }
 }
 
+// A scanner that looks up to 30° only leaves the space over its head unseen. A coarse
+// octant reaching from the robot's head (scanner at 1.14 m: its top at 1.24 m) up to 1.6 m
+// was judged whole: its upper corners lie above the elevation limit, not in the blind zone,
+// so it blocked the robot's own cylinder and the survey stopped after one scan. Only its
+// part within the cylinder's height matters (docs/nbv.md, "Blind zone of past scans").
+TEST(Survey, TheSpaceOverTheRobotsHeadDoesNotBlockIt) {
+  for (const std::string height : {"0.8", "1.14", "1.6", "2.2"}) {
+    const json j = survey("head" + height, "--scene " + kScenes +
+                                               "box-room.scene.json --max-scans 1 "
+                                               "--no-coverage --elevation-max 30 "
+                                               "--scanner-height " +
+                                               height);
+    ASSERT_FALSE(j.is_null());
+    ASSERT_EQ(j["scans"].size(), 1u);
+    EXPECT_TRUE(j["scans"][0]["nbv"].is_object()) << height << ": " << j["stopped_because"];
+    EXPECT_GT(j["scans"][0]["candidates"].get<int>(), 20) << height;
+  }
+}
+
 TEST(Survey, NextBestViewsCoverMoreThanRandomFeasiblePositions) {
   if (sanitized()) GTEST_SKIP() << "too slow under sanitizers";
   // The same number of scans (3; never stopping early) chosen by the NBV or at

@@ -71,7 +71,8 @@ std::vector<std::uint8_t> obstacle_columns(const SemiOcTree& tree, const Plane& 
   const CoarseIndex &lo = plane.lo, &hi = plane.hi;
   const std::int64_t layers =
       std::max<std::int64_t>(1, std::llround(std::ceil(robot.top() / r - 1e-9)));
-  const double clearance = floor_layer_clearance(robot, r) / r + 1e-9;  // in cells
+  const double clearance = floor_layer_clearance(robot, r) / r + 1e-9;   // in cells
+  const std::int64_t first_layer = std::int64_t(std::floor(clearance));  // its lowest layer
   for (int cx = lo.x; cx <= hi.x; ++cx)
     for (int cy = lo.y; cy <= hi.y; ++cy)
       for (std::int64_t cz = 0; cz <= (layers - 1) >> k; ++cz)
@@ -84,7 +85,8 @@ std::vector<std::uint8_t> obstacle_columns(const SemiOcTree& tree, const Plane& 
     if (z >= layers || double(z + size) <= clearance) return;
     const Label l = o.label();
     if (l == Label::kOccluded) {
-      if (params.blind_zone_is_free && blind_octant(o, k, past_scans, limits)) {
+      if (params.blind_zone_is_free &&
+          blind_octant(o, k, first_layer, layers - 1, past_scans, limits)) {
         ++rep.blind_octants_freed;
         return;
       }
