@@ -110,6 +110,28 @@ TEST(ScanIo, ReadsPtxScansWithTheirPoses) {
   }
 }
 
+// A PTX header claiming more points than the rest of the file can hold is refused
+// before the scan is allocated (found by fuzzing: 2.4 GB reserved for an 8-digit
+// column count in a 400-byte file); an exact fit is read.
+TEST(ScanIo, PtxScanSizeBeyondTheFileIsRefusedBeforeAllocating) {
+  const auto dir = testing::temp_dir("ptx_size");
+  const std::string header = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
+  std::ofstream(dir / "huge.ptx") << "49999999\n3\n" << header << "1 0 0\n2 0 0\n";
+  try {
+    read_scans((dir / "huge.ptx").string());
+    FAIL() << "read a scan of 149999997 points from a small file";
+  } catch (const ScanReadError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("huge.ptx:1: scan 0 of 49999999 x 3 points needs at least"),
+              std::string::npos)
+        << what;
+    EXPECT_NE(what.find("truncated, or its size is wrong"), std::string::npos) << what;
+  }
+  // Two points of the shortest form, the last without its line end: 11 bytes, enough.
+  std::ofstream(dir / "tight.ptx") << "2\n1\n" << header << "1 0 0\n2 0 0";
+  EXPECT_EQ(read_scans((dir / "tight.ptx").string())[0].points->size(), 2u);
+}
+
 TEST(ScanIo, PosesAndErrors) {
   const ScanPose p = parse_pose("1.5,-2,0.3,90");
   EXPECT_NEAR(p.position().y(), -2.0, 1e-12);
