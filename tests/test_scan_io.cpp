@@ -132,6 +132,35 @@ TEST(ScanIo, PtxScanSizeBeyondTheFileIsRefusedBeforeAllocating) {
   EXPECT_EQ(read_scans((dir / "tight.ptx").string())[0].points->size(), 2u);
 }
 
+// PCL's PLY reader asserts that an obj_info line starts with the word: a leading
+// blank aborted the program (found by fuzzing). It is a clear error now, and
+// obj_info without one still reads.
+TEST(ScanIo, PlyObjInfoLineWithALeadingBlankIsAnError) {
+  const auto dir = testing::temp_dir("ply_obj_info");
+  for (const std::string lead : {" ", "\t", ""}) {
+    const auto path = dir / "lead.ply";
+    {
+      std::ofstream f(path, std::ios::binary);
+      f << "ply\nformat ascii 1.0\n"
+        << lead << "obj_info num_rows 1\nelement vertex 2\n"
+        << "property float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n4 5 6\n";
+    }
+    if (lead.empty()) {
+      EXPECT_EQ(read_scans(path.string())[0].points->size(), 2u);
+      continue;
+    }
+    try {
+      read_scans(path.string());
+      FAIL() << "read a PLY whose obj_info line starts with a blank";
+    } catch (const ScanReadError& e) {
+      EXPECT_NE(std::string(e.what()).find(
+                    "lead.ply: PLY header line 3: obj_info line starts with a blank"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 TEST(ScanIo, PosesAndErrors) {
   const ScanPose p = parse_pose("1.5,-2,0.3,90");
   EXPECT_NEAR(p.position().y(), -2.0, 1e-12);
