@@ -1,6 +1,8 @@
 // For fuzz targets whose reader takes a path (PCL's readers do): the input is
-// written to a file in a directory of this process's own, on a RAM disk
-// (/dev/shm) where there is one, removed when the process exits normally.
+// written to a file in a directory of this process's own, made in
+// $SEMIOCTREE_FUZZ_SCRATCH if set (run.sh sets it and removes it afterwards: a
+// process ending on a finding leaves its directory behind), else on a RAM disk
+// (/dev/shm) where there is one; removed when the process exits normally.
 #pragma once
 
 #include <unistd.h>
@@ -20,8 +22,10 @@ inline const std::string& scratch_dir() {
   static const std::string dir = [] {
     namespace fs = std::filesystem;
     std::error_code ec;
-    const fs::path base =
-        fs::is_directory("/dev/shm", ec) ? fs::path("/dev/shm") : fs::temp_directory_path();
+    const char* given = std::getenv("SEMIOCTREE_FUZZ_SCRATCH");
+    const fs::path base = given && *given                    ? fs::path(given)
+                          : fs::is_directory("/dev/shm", ec) ? fs::path("/dev/shm")
+                                                             : fs::temp_directory_path();
     std::string pattern = (base / "semioctree-fuzz-XXXXXX").string();
     if (!::mkdtemp(pattern.data())) throw std::runtime_error("cannot make " + pattern);
     static std::string made;

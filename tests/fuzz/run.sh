@@ -17,7 +17,7 @@ TARGETS=("$@")
 BUILD_DIR=${SEMIOCTREE_FUZZ_BUILD_DIR:-build-fuzz}
 
 if ! command -v clang++ >/dev/null || ! command -v clang >/dev/null; then
-  echo "run.sh: clang is needed for libFuzzer (Debian: apt-get install clang)" >&2
+  echo "run.sh: clang is needed for libFuzzer (Debian: apt-get install clang libclang-rt-dev)" >&2
   exit 1
 fi
 if [ ! -f "$BUILD_DIR/CMakeCache.txt" ]; then
@@ -40,11 +40,18 @@ dictionary_of() {
 }
 
 SCRATCH=$(mktemp -d)
-trap 'rm -rf "$SCRATCH"' EXIT
+# The targets' own scratch files (point files written for PCL), on a RAM disk if any.
+SHM_BASE=/dev/shm
+[ -d "$SHM_BASE" ] && [ -w "$SHM_BASE" ] || SHM_BASE=$SCRATCH
+export SEMIOCTREE_FUZZ_SCRATCH
+SEMIOCTREE_FUZZ_SCRATCH=$(mktemp -d "$SHM_BASE/semioctree-fuzz-run.XXXXXX")
+trap 'rm -rf "$SCRATCH" "$SEMIOCTREE_FUZZ_SCRATCH"' EXIT
 # Leaks are findings too; UBSan reports abort (the build has -fno-sanitize-recover).
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1}
 failed=()
+budget="$SECONDS_EACH s"
+[ -z "${FUZZ_RUNS:-}" ] || budget="$FUZZ_RUNS runs"
 for t in "${TARGETS[@]}"; do
   corpus="$SCRATCH/$t"
   findings="$BUILD_DIR/findings/$t"
@@ -55,10 +62,12 @@ for t in "${TARGETS[@]}"; do
   if [ -n "${FUZZ_RUNS:-}" ]; then args+=(-runs="$FUZZ_RUNS"); else args+=(-max_total_time="$SECONDS_EACH"); fi
   dict=$(dictionary_of "$t")
   [ -n "$dict" ] && args+=(-dict="$dict")
-  echo "== $t (${FUZZ_RUNS:+$FUZZ_RUNS runs}${FUZZ_RUNS:-$SECONDS_EACH s})"
+  echo "== $t ($budget)"
   log="$SCRATCH/$t.log"
+  start=$(date +%s)
   if "$BUILD_DIR/tests/fuzz/$t" "${args[@]}" "$corpus" >"$log" 2>&1; then
     grep -E "^stat::(number_of_executed_units|average_exec_per_sec|peak_rss_mb)" "$log" || true
+    echo "wall time: $(($(date +%s) - start)) s"
   else
     tail -n 60 "$log"
     echo "== $t: FINDING, input kept in $findings/" >&2
