@@ -523,6 +523,10 @@ void check_ply_file(const std::string& path) {
               at + "list property in the vertex element is not supported: " + excerpt(h.lines[i]));
         vertex_types[t[2]] = t[1];
       }
+    } else if (t[0] == "obj_info" && std::isspace(static_cast<unsigned char>(h.lines[i][0]))) {
+      // PCL's reader splits the line at blanks and asserts that its first word is
+      // obj_info: a leading blank aborts the program.
+      throw ScanReadError(at + "obj_info line starts with a blank: " + excerpt(h.lines[i]));
     } else if (t[0] == "obj_info" && t.size() >= 3 && (t[1] == "num_cols" || t[1] == "num_rows")) {
       // PCL reads these with atoi and sizes its buffer by them.
       const auto v = std::uint32_t(int(std::strtol(t[2].c_str(), nullptr, 10)));

@@ -185,8 +185,10 @@ Scan read_xyz(const std::string& path) {
 
 std::vector<Scan> read_ptx(const std::string& path) {
   require_file(path);
+  std::error_code ec;
+  const std::uint64_t file_size = std::filesystem::file_size(path, ec);
   std::ifstream f(path);
-  if (!f) throw ScanReadError(path + ": cannot open");
+  if (ec || !f) throw ScanReadError(path + ": cannot open");
   std::vector<Scan> scans;
   std::string line;
   std::vector<double> v;
@@ -239,6 +241,18 @@ std::vector<Scan> read_ptx(const std::string& path) {
     scan.pose.scanner_to_survey.matrix() = m.transpose();
     scan.pose_from_file = true;
     const std::size_t n = std::size_t(cols) * std::size_t(rows);
+    // Each point takes at least "0 0 0" and a line end (the last may lack it): a
+    // size the rest of the file cannot hold is wrong, and must not be allocated.
+    const std::streamoff here = f.tellg();
+    const std::uint64_t left =
+        here < 0 ? 0 : file_size - std::min<std::uint64_t>(file_size, std::uint64_t(here));
+    if (6 * std::uint64_t(n) - 1 > left)
+      throw ScanReadError(path + ":" + std::to_string(lineno - 9) + ": scan " +
+                          std::to_string(scans.size()) + " of " +
+                          std::to_string(std::size_t(cols)) + " x " +
+                          std::to_string(std::size_t(rows)) + " points needs at least " +
+                          std::to_string(6 * std::uint64_t(n) - 1) + " more bytes, the file has " +
+                          std::to_string(left) + " (truncated, or its size is wrong)");
     scan.points->reserve(n);
     for (std::size_t i = 0; i < n; ++i) {
       next_numbers(3, "a point 'x y z [intensity [r g b]]'");

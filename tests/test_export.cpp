@@ -58,6 +58,24 @@ TEST(Labels, NamesReadBackAsTheirLabel) {
   EXPECT_EQ(label_color(Label(255)).r, 0);
 }
 
+// A tree with nothing to export (no octant, or only unknown ones: an empty .ot
+// read back) exports as empty trees, which write and read back; found by fuzzing.
+TEST(Export, TreeWithNothingLabelledExportsEmptyTrees) {
+  SemiOcTree none(0.1, 0.4);
+  SemiOcTree unknown_only(0.1, 0.4);
+  unknown_only.create_coarse({0, 0, 0}, Label::kUnknown);
+  for (const SemiOcTree* t : {&none, &unknown_only}) {
+    const auto color = to_color_octree(*t);
+    EXPECT_EQ(color->size(), 0u);
+    EXPECT_EQ(to_occupancy_octree(*t)->size(), 0u);
+    std::stringstream s;
+    ASSERT_TRUE(color->write(s));
+    const TreeFile back = read_tree_stream(s, "empty color tree");
+    EXPECT_EQ(back.type, "ColorOcTree");
+    EXPECT_EQ(back.tree->size(), 0u);
+  }
+}
+
 TEST(Export, ColorTreeHasEveryLabelledOctantInItsColour) {
   const auto t_tree = testing::sample_tree();
   const SemiOcTree& t = *t_tree;

@@ -2,9 +2,12 @@
 // map, pruned free and occupied nodes, the coarse grid over the map's extent, bad sizes.
 #include <gtest/gtest.h>
 
+#include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include "semioctree/octomap_ext/export.h"
+#include "semioctree/octomap_ext/file_io.h"
 #include "semioctree/octomap_ext/import.h"
 #include "support/sample_trees.h"
 
@@ -95,6 +98,38 @@ TEST(Import, CoarseSizeMustBeTheResolutionTimesAPowerOfTwo) {
   EXPECT_THROW(from_occupancy_octree(map, 0.025), std::invalid_argument);
   // An empty map gives an empty tree.
   EXPECT_EQ(from_occupancy_octree(octomap::OcTree(0.05), 0.8)->coarse_count(), 0u);
+}
+
+// A few bytes of map can claim a huge solid or a huge extent: the import counts the
+// octants it would make and refuses too many before creating any (found by fuzzing:
+// these made map-nbv run for hours).
+TEST(Import, RefusesMapsThatWouldMakeMoreOctantsThanAllowed) {
+  octomap::OcTree map(0.05);
+  map.updateNode(0.1, 0.1, 0.1, true);  // one occupied leaf in one coarse voxel: 2 octants
+  EXPECT_EQ(from_occupancy_octree(map, 0.4, Label::kUnknown, nullptr, 2)->coarse_count(), 1u);
+  EXPECT_THROW(from_occupancy_octree(map, 0.4, Label::kUnknown, nullptr, 1), std::length_error);
+
+  // A 61-byte .bt: the root and one occupied child, a pruned solid of half the key
+  // space per axis (32768³ leaves), more than any machine's memory holds.
+  const std::string solid = std::string(
+                                "# Octomap OcTree binary file\nid OcTree\nsize 2\nres 0.1\n"
+                                "data\n") +
+                            std::string("\x02\x00", 2);
+  std::istringstream in(solid);
+  const TreeFile file = read_tree_stream(in, "solid.bt");
+  const auto& occupancy = dynamic_cast<const octomap::OcTree&>(*file.tree);
+  try {
+    from_occupancy_octree(occupancy, 0.8);
+    FAIL() << "imported a 32768³-leaf solid";
+  } catch (const std::length_error& e) {
+    EXPECT_NE(std::string(e.what()).find("more than the"), std::string::npos) << e.what();
+  }
+
+  // Two free nodes 6 km apart on each axis: 7500³ coarse voxels of 0.8 m.
+  octomap::OcTree far(0.1);
+  far.updateNode(-3000.0, -3000.0, -3000.0, false);
+  far.updateNode(3000.0, 3000.0, 3000.0, false);
+  EXPECT_THROW(from_occupancy_octree(far, 0.8), std::length_error);
 }
 
 }  // namespace

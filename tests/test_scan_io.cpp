@@ -110,6 +110,57 @@ TEST(ScanIo, ReadsPtxScansWithTheirPoses) {
   }
 }
 
+// A PTX header claiming more points than the rest of the file can hold is refused
+// before the scan is allocated (found by fuzzing: 2.4 GB reserved for an 8-digit
+// column count in a 400-byte file); an exact fit is read.
+TEST(ScanIo, PtxScanSizeBeyondTheFileIsRefusedBeforeAllocating) {
+  const auto dir = testing::temp_dir("ptx_size");
+  const std::string header = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
+  std::ofstream(dir / "huge.ptx") << "49999999\n3\n" << header << "1 0 0\n2 0 0\n";
+  try {
+    read_scans((dir / "huge.ptx").string());
+    FAIL() << "read a scan of 149999997 points from a small file";
+  } catch (const ScanReadError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("huge.ptx:1: scan 0 of 49999999 x 3 points needs at least"),
+              std::string::npos)
+        << what;
+    EXPECT_NE(what.find("truncated, or its size is wrong"), std::string::npos) << what;
+  }
+  // Two points of the shortest form, the last without its line end: 11 bytes, enough.
+  std::ofstream(dir / "tight.ptx") << "2\n1\n" << header << "1 0 0\n2 0 0";
+  EXPECT_EQ(read_scans((dir / "tight.ptx").string())[0].points->size(), 2u);
+}
+
+// PCL's PLY reader asserts that an obj_info line starts with the word: a leading
+// blank aborted the program (found by fuzzing). It is a clear error now, and
+// obj_info without one still reads.
+TEST(ScanIo, PlyObjInfoLineWithALeadingBlankIsAnError) {
+  const auto dir = testing::temp_dir("ply_obj_info");
+  for (const std::string lead : {" ", "\t", ""}) {
+    const auto path = dir / "lead.ply";
+    {
+      std::ofstream f(path, std::ios::binary);
+      f << "ply\nformat ascii 1.0\n"
+        << lead << "obj_info num_rows 1\nelement vertex 2\n"
+        << "property float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n4 5 6\n";
+    }
+    if (lead.empty()) {
+      EXPECT_EQ(read_scans(path.string())[0].points->size(), 2u);
+      continue;
+    }
+    try {
+      read_scans(path.string());
+      FAIL() << "read a PLY whose obj_info line starts with a blank";
+    } catch (const ScanReadError& e) {
+      EXPECT_NE(std::string(e.what()).find(
+                    "lead.ply: PLY header line 3: obj_info line starts with a blank"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 TEST(ScanIo, PosesAndErrors) {
   const ScanPose p = parse_pose("1.5,-2,0.3,90");
   EXPECT_NEAR(p.position().y(), -2.0, 1e-12);

@@ -50,7 +50,9 @@ std::unique_ptr<octomap::ColorOcTree> to_color_octree(const SemiOcTree& tree) {
     node->setColor(c.r, c.g, c.b);
   });
   // Inner nodes: occupancy = max of children, colour = average (not drawn).
-  out->updateInnerOccupancy();
+  // ColorOcTree's updateInnerOccupancy reads the root without checking it: a tree
+  // with no labelled octant (an empty .ot) has none.
+  if (out->getRoot()) out->updateInnerOccupancy();
   return out;
 }
 

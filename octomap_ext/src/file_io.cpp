@@ -155,18 +155,22 @@ TreeFile read_tree_file(const std::string& path) {
     throw FileError(path + ": is a directory, not an OctoMap file");
   std::ifstream f(path, std::ios::binary);
   if (!f) throw FileError(path + ": cannot open: " + std::strerror(errno));
+  return read_tree_stream(f, path);
+}
+
+TreeFile read_tree_stream(std::istream& in, const std::string& name) {
   try {
     std::string first;
-    if (!std::getline(f, first)) throw FileFormatError("file is empty");
+    if (!std::getline(in, first)) throw FileFormatError("file is empty");
     if (!first.empty() && first.back() == '\r') first.pop_back();
-    if (first.rfind(kBtHeader, 0) == 0) return read_bt(f, parse_header(f, true));
-    if (first.rfind(kOtHeader, 0) == 0) return read_ot(f, parse_header(f, false));
+    if (first.rfind(kBtHeader, 0) == 0) return read_bt(in, parse_header(in, true));
+    if (first.rfind(kOtHeader, 0) == 0) return read_ot(in, parse_header(in, false));
     throw FileFormatError("not an OctoMap file (first line is neither '" + std::string(kOtHeader) +
                           "' nor '" + kBtHeader + "')");
   } catch (const FileFormatError& e) {
-    throw FileError(path + ": " + e.what());
+    throw FileError(name + ": " + e.what());
   } catch (const std::bad_alloc&) {
-    throw FileError(path + ": out of memory while reading (corrupted sizes?)");
+    throw FileError(name + ": out of memory while reading (corrupted sizes?)");
   }
 }
 

@@ -1,13 +1,30 @@
 #include "semioctree/octomap_ext/import.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace semioctree {
 
+namespace {
+
+// Octants of sizeof(SemiOcTreeNode) bytes that this machine's physical memory holds.
+std::uint64_t octants_in_physical_memory() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page_size = ::sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page_size <= 0) return std::numeric_limits<std::uint64_t>::max();
+  return std::uint64_t(pages) * std::uint64_t(page_size) / sizeof(SemiOcTreeNode);
+}
+
+}  // namespace
+
 std::unique_ptr<SemiOcTree> from_occupancy_octree(const octomap::OcTree& map, double coarse_size,
-                                                  Label unobserved, OccupancyImportReport* report) {
+                                                  Label unobserved, OccupancyImportReport* report,
+                                                  std::uint64_t max_octants) {
   auto tree = std::make_unique<SemiOcTree>(map.getResolution(), coarse_size);
   OccupancyImportReport rep;
   const unsigned k = tree->leaf_level();
@@ -32,6 +49,9 @@ std::unique_ptr<SemiOcTree> from_occupancy_octree(const octomap::OcTree& map, do
   };
   std::vector<Node> nodes;
   std::uint32_t lo[3] = {~0u, ~0u, ~0u}, hi[3] = {0, 0, 0};  // cells, inclusive
+  // Octants the labelling below makes, besides the coarse voxels. The map's leaves do
+  // not overlap and lie in 2^48 cells: no sum overflows.
+  std::uint64_t labelled_octants = 0;
   for (auto it = map.begin_leafs(), end = map.end_leafs(); it != end; ++it) {
     nodes.push_back({it.getKey(), it.getDepth(), map.isNodeOccupied(*it)});
     const std::uint32_t n = 1u << (max_depth - it.getDepth());
@@ -39,10 +59,26 @@ std::unique_ptr<SemiOcTree> from_occupancy_octree(const octomap::OcTree& map, do
       lo[a] = std::min(lo[a], first_cell(it.getKey(), n, a));
       hi[a] = std::max(hi[a], first_cell(it.getKey(), n, a) + n - 1);
     }
+    const std::uint64_t per_axis = nodes.back().occupied           ? n   // leaves
+                                   : it.getDepth() >= coarse_depth ? 1u  // one octant
+                                                                   : n / coarse_cells;
+    labelled_octants += per_axis * per_axis * per_axis;
   }
   if (!nodes.empty()) {
     const CoarseIndex c0 = tree->coarse_index(cell_key(lo[0], lo[1], lo[2]));
     const CoarseIndex c1 = tree->coarse_index(cell_key(hi[0], hi[1], hi[2]));
+    const std::uint64_t coarse = std::uint64_t(c1.x - c0.x + 1) * std::uint64_t(c1.y - c0.y + 1) *
+                                 std::uint64_t(c1.z - c0.z + 1);
+    const std::uint64_t limit = max_octants ? max_octants : octants_in_physical_memory();
+    if (coarse + labelled_octants > limit)
+      throw std::length_error(
+          "the map's " + std::to_string(nodes.size()) + " leaf nodes span " +
+          std::to_string(c1.x - c0.x + 1) + " x " + std::to_string(c1.y - c0.y + 1) + " x " +
+          std::to_string(c1.z - c0.z + 1) + " coarse voxels of " + std::to_string(coarse_size) +
+          " m and would make " + std::to_string(coarse + labelled_octants) +
+          " octants, more than the " + std::to_string(limit) +
+          (max_octants ? " allowed" : " this machine's memory holds") +
+          " (a corrupted map, or far-apart nodes?)");
     for (auto x = c0.x; x <= c1.x; ++x)
       for (auto y = c0.y; y <= c1.y; ++y)
         for (auto z = c0.z; z <= c1.z; ++z) {

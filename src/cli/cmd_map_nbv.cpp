@@ -172,7 +172,11 @@ void run_map_nbv(const MapNbvOptions& o) {
     }
     OccupancyImportReport rep;
     const Label unobserved = o.unobserved == "occluded" ? Label::kOccluded : Label::kUnknown;
-    tree = from_occupancy_octree(*occupancy, o.coarse, unobserved, &rep);
+    try {
+      tree = from_occupancy_octree(*occupancy, o.coarse, unobserved, &rep);
+    } catch (const std::length_error& e) {
+      throw std::runtime_error(o.map + ": " + e.what());
+    }
     std::printf(
         "read %s: OctoMap %s, resolution %.3f m, %zu leaf nodes → SemiOcTree of %zu coarse "
         "voxels (%zu occupied leaves) [%.2f s]\n",

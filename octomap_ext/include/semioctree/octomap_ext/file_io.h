@@ -7,6 +7,7 @@
 #include <octomap/OcTree.h>
 
 #include <functional>
+#include <istream>
 #include <memory>
 #include <ostream>
 #include <stdexcept>
@@ -33,6 +34,8 @@ struct TreeFile {
 // first line, not its name. Throws FileError naming the file on a missing,
 // truncated, corrupted or unsupported file.
 TreeFile read_tree_file(const std::string& path);
+// The same from a stream holding a whole file; `name` stands for the file in messages.
+TreeFile read_tree_stream(std::istream& in, const std::string& name);
 // Same, and requires a SemiOcTree.
 std::unique_ptr<SemiOcTree> read_semioctree_file(const std::string& path);
 

@@ -7,6 +7,7 @@
 #include <octomap/OcTree.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 
 #include "semioctree/octomap_ext/semioctree.h"
@@ -31,8 +32,16 @@ struct OccupancyImportReport {
 // kUnknown), or kOccluded to take all of it as hidden. Sibling octants left with one
 // label are merged. Throws std::invalid_argument if coarse_size is not the map's
 // resolution times a power of two (up to 2^kMaxLeafLevel).
+//
+// A few bytes of map can claim a huge extent (two nodes at opposite corners of
+// OctoMap's key space) or a huge solid (a pruned occupied node): before creating
+// anything, the octants the import would make (coarse voxels over the extent,
+// occupied leaves, empty octants) are counted, and more than `max_octants` throws
+// std::length_error saying how many. 0: as many as this machine's physical memory
+// holds at sizeof(SemiOcTreeNode) bytes each (a lower bound of their cost).
 std::unique_ptr<SemiOcTree> from_occupancy_octree(const octomap::OcTree& map, double coarse_size,
                                                   Label unobserved = Label::kUnknown,
-                                                  OccupancyImportReport* report = nullptr);
+                                                  OccupancyImportReport* report = nullptr,
+                                                  std::uint64_t max_octants = 0);
 
 }  // namespace semioctree
