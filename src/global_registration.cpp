@@ -164,6 +164,15 @@ GlobalAlignResult global_align(const Cloud& source, const Cloud& target,
   const std::int64_t ox0 = tx0 - reach_cells - 1, oy0 = ty0 - reach_cells - 1;
   const std::int64_t width = tx1 - tx0 + 2 * reach_cells + 3;
   const std::int64_t height = ty1 - ty0 + 2 * reach_cells + 3;
+  // One vote grid per yaw in flight: refuse spans that would not fit in memory
+  // (2.5 · 10⁷ cells of 0.2 m: 1 km on a side).
+  if (double(width) * double(height) > 2.5e7) {
+    std::ostringstream m;
+    m << "global alignment: the clouds' wall points span " << double(width) * p.cell << " × "
+      << double(height) * p.cell << " m of translations, too far to search with " << p.cell
+      << " m cells";
+    throw RegistrationError(m.str());
+  }
   std::vector<std::int64_t> target_index;
   target_index.reserve(target_cells.size());
   for (const Cell& c : target_cells) target_index.push_back((c.x - ox0) * height + (c.y - oy0));
@@ -333,8 +342,8 @@ GlobalAlignResult global_align(const Cloud& source, const Cloud& target,
   if (!found) {
     std::ostringstream m;
     m << "global alignment found no placement that passes the bounds (" << figures.str()
-      << "; best screened overlap " << r.screened.front().overlap << " within "
-      << coarse.final_correspondence << " m, bound " << reg.min_overlap << ")";
+      << "; best screened overlap " << (r.screened.empty() ? 0.0 : r.screened.front().overlap)
+      << " within " << coarse.final_correspondence << " m, bound " << reg.min_overlap << ")";
     if (!first_failure.empty()) m << "; the best one refined: " << first_failure;
     m << "; the scans do not overlap enough";
     throw RegistrationError(m.str());
