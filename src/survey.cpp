@@ -25,6 +25,18 @@ const char* to_string(StopReason reason) {
   return "?";
 }
 
+const char* to_string(PlacedBy placed_by) {
+  switch (placed_by) {
+    case PlacedBy::kPose:
+      return "pose";
+    case PlacedBy::kPoseAndIcp:
+      return "pose+icp";
+    case PlacedBy::kGlobalAndIcp:
+      return "global+icp";
+  }
+  return "?";
+}
+
 double yaw_deg_of(const Eigen::Isometry3d& pose) {
   const Eigen::Vector3d x = pose.rotation() * Eigen::Vector3d::UnitX();
   return std::atan2(x.y(), x.x()) * 180.0 / M_PI;
@@ -99,23 +111,38 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
   rec.tilt_beta_deg = pre.beta_deg;
   rec.seconds.preprocess = seconds_since(t0);
   observer_->stage_done(SurveyStage::kPreprocessed, rec);
-  const Eigen::Isometry3d place = planar_pose(in.x, in.y, in.yaw_deg);
+  const bool no_pose = in.placement == ScanPlacement::kNoPose;
+  const Eigen::Isometry3d place =
+      no_pose ? Eigen::Isometry3d::Identity() : planar_pose(in.x, in.y, in.yaw_deg);
   Cloud::Ptr guess(new Cloud);
   pcl::transformPointCloud(*pre.cloud, *guess, place.matrix().cast<float>());
 
-  // Stage 2: ICP against the merged cloud of the previous scans.
+  // Stage 2: ICP against the merged cloud of the previous scans, from the reported
+  // pose or, without one, from the global alignment's guess.
   t0 = Clock::now();
   Eigen::Isometry3d correction = Eigen::Isometry3d::Identity();
-  if (rec.index > 0 && in.registered) {
+  if (rec.index > 0 && in.placement != ScanPlacement::kExact) {
     ScanRecord::Registration reg;
     try {
-      reg.icp = register_scan(*guess, map_.merged_cloud(), params_.registration);
-      reg.scanner_shift_m = checked_scanner_shift(reg.icp, place, in);
+      if (no_pose) {
+        GlobalAlignResult g =
+            global_align(*guess, map_.merged_cloud(), params_.registration, params_.global_align);
+        const Eigen::Vector3d c = g.guess * pre.transform.translation();
+        reg.scanner_shift_m = (g.icp.correction * c - c).head<2>().norm();
+        reg.icp = g.icp;
+        correction = g.transform;
+        reg.global = std::move(g);
+        rec.placed_by = PlacedBy::kGlobalAndIcp;
+      } else {
+        reg.icp = register_scan(*guess, map_.merged_cloud(), params_.registration);
+        reg.scanner_shift_m = checked_scanner_shift(reg.icp, place, in);
+        correction = reg.icp.correction;
+        rec.placed_by = PlacedBy::kPoseAndIcp;
+      }
     } catch (const RegistrationError& e) {
       throw RegistrationError("scan " + std::to_string(rec.index) + " could not be registered (" +
                               e.what() + "); the map of the previous scans is kept");
     }
-    correction = reg.icp.correction;
     rec.registration = reg;
   }
   rec.seconds.registration = seconds_since(t0);

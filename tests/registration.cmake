@@ -9,3 +9,23 @@ if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/test_registration.cpp)
   endif()
   target_include_directories(test_registration PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
 endif()
+# Registration without a pose over lab pairs and the real scan's moved copy (JSON).
+if(TARGET semioctree_sim)
+  semioctree_add_bench(bench_global_registration SOURCES bench_global_registration.cpp
+                       LIBS semioctree semioctree_sim nlohmann_json::nlohmann_json)
+  if(TARGET bench_global_registration)
+    target_include_directories(bench_global_registration PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+  endif()
+endif()
+# Registration without a pose; its lab pairs need the synthetic scanner.
+if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/test_global_registration.cpp)
+  if(TARGET semioctree_sim)
+    semioctree_add_test(test_global_registration SOURCES test_global_registration.cpp
+                        LIBS semioctree semioctree_sim)
+    target_compile_definitions(test_global_registration PRIVATE SEMIOCTREE_HAVE_SIM=1)
+  else()
+    semioctree_add_test(test_global_registration SOURCES test_global_registration.cpp
+                        LIBS semioctree)
+  endif()
+  target_include_directories(test_global_registration PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+endif()

@@ -344,12 +344,21 @@ TEST(Survey, WritesEveryOutputWithTheDocumentedSchema) {
 // `scan` writes each scan in its own frame with the pose as the PCD viewpoint;
 // `nbv` places the scans by those viewpoints without --pose.
 fs::path scan_pcd(const std::string& name, const std::string& at,
-                  const std::string& scene = "box-room") {
+                  const std::string& scene = "box-room", const std::string& options = "") {
   const fs::path f = scratch() / (name + ".pcd");
   const auto r = run_cli("scan --scene " + kScenes + scene + ".scene.json --at " + at +
-                         " --no-intensity --out " + f.string());
+                         " --no-intensity " + options + " --out " + f.string());
   EXPECT_EQ(r.exit_code, 0) << r.all();
   return f;
+}
+
+// Replaces a PCD's viewpoint by the identity: a scan without a pose.
+void strip_viewpoint(const fs::path& pcd) {
+  std::string bytes = testing::slurp(pcd.string());
+  const std::size_t at = bytes.find("VIEWPOINT ");
+  ASSERT_NE(at, std::string::npos);
+  bytes.replace(at, bytes.find('\n', at) - at, "VIEWPOINT 0 0 0 1 0 0 0");
+  std::ofstream(pcd, std::ios::binary) << bytes;
 }
 
 TEST(Nbv, PlacesScansByTheirFileViewpointAndReportsTheNextView) {
@@ -380,11 +389,7 @@ TEST(Nbv, FailedRegistrationStillWritesTheSurveyOfTheScansBefore) {
   // the first (overlap far below its bound); the command says so, after
   // writing what it has.
   const fs::path a = scan_pcd("reg_a", "1.0,2.0"), b = scan_pcd("reg_b", "5.2,3.6", "lab");
-  std::string bytes = testing::slurp(b.string());
-  const std::size_t at = bytes.find("VIEWPOINT ");
-  ASSERT_NE(at, std::string::npos);
-  bytes.replace(at, bytes.find('\n', at) - at, "VIEWPOINT 0 0 0 1 0 0 0");
-  std::ofstream(b, std::ios::binary) << bytes;
+  strip_viewpoint(b);
   const fs::path out = scratch() / "nbv_reg";
   const auto r =
       run_cli("nbv --cloud " + a.string() + " --cloud " + b.string() + " --out " + out.string());
@@ -395,6 +400,58 @@ TEST(Nbv, FailedRegistrationStillWritesTheSurveyOfTheScansBefore) {
   EXPECT_FALSE(j["complete"].get<bool>());
   EXPECT_EQ(j["scans"].size(), 1u);
   EXPECT_NE(j["error"].get<std::string>().find("could not be registered"), std::string::npos);
+}
+
+TEST(Nbv, PlacesScansWithoutPoseByGlobalAlignment) {
+  // Two lab scans 2.9 m and 130° apart, their viewpoints removed: the second is
+  // placed by global alignment, then ICP, at its true pose relative to the first.
+  const std::string step = "--azimuth-step 0.2 --elevation-step 0.2";
+  const fs::path a = scan_pcd("ga_a", "5.2,3.6,0", "lab", step);
+  const fs::path b = scan_pcd("ga_b", "7.8,4.9,130", "lab", step);
+  strip_viewpoint(a);
+  strip_viewpoint(b);
+  const fs::path out = scratch() / "nbv_global";
+  const auto r =
+      run_cli("nbv --cloud " + a.string() + " --cloud " + b.string() + " --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.all();
+  EXPECT_NE(r.out.find("no pose: placed by global alignment, then ICP"), std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("global alignment:"), std::string::npos) << r.out;
+  const json j = read_json(out / "survey.json");
+  ASSERT_EQ(j["scans"].size(), 2u);
+  EXPECT_EQ(j["scans"][0]["placed_by"], "pose");
+  EXPECT_EQ(j["scans"][1]["placed_by"], "global+icp");
+  const json& g = j["scans"][1]["registration"]["global"];
+  ASSERT_TRUE(g.is_object()) << j["scans"][1]["registration"];
+  EXPECT_GT(g["yaw_steps"].get<int>(), 90);
+  EXPECT_GE(g["screened"].size(), 1u);
+  // The survey frame is the first scan's: the second is 2.6 m east and 1.3 m north
+  // of it, turned by 130°.
+  const json& pose = j["scans"][1]["pose"];
+  EXPECT_NEAR(pose["x"].get<double>(), 2.6, 0.02);
+  EXPECT_NEAR(pose["y"].get<double>(), 1.3, 0.02);
+  EXPECT_NEAR(pose["yaw_deg"].get<double>(), 130.0, 0.3);
+}
+
+TEST(Nbv, SymmetricRoomWithoutPoseIsRefused) {
+  // The empty box room looks the same turned by 180°: no pose, no placement.
+  const fs::path a = scan_pcd("sym_a", "1.5,1.2"), b = scan_pcd("sym_b", "4.0,2.5,70");
+  strip_viewpoint(a);
+  strip_viewpoint(b);
+  const fs::path out = scratch() / "nbv_sym";
+  const auto r =
+      run_cli("nbv --cloud " + a.string() + " --cloud " + b.string() + " --out " + out.string());
+  EXPECT_EQ(r.exit_code, 1) << r.all();
+  EXPECT_NE(r.err.find("ambiguous"), std::string::npos) << r.err;
+  const json j = read_json(out / "survey.json");
+  EXPECT_EQ(j["stopped_because"], "registration_failed");
+  EXPECT_EQ(j["scans"].size(), 1u);
+  // --global-align on ignores poses: with --pose it is refused before any work.
+  const auto both = run_cli("nbv --cloud " + a.string() + " --cloud " + b.string() +
+                            " --pose 0,0,0 --pose 1,1,0 --global-align on --out " +
+                            (scratch() / "nbv_on").string());
+  EXPECT_NE(both.exit_code, 0);
+  EXPECT_NE(both.err.find("--global-align on"), std::string::npos) << both.err;
 }
 
 // The lab with defaults (issue 6's acceptance): stop percentage reached within

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "semioctree/global_registration.h"
 #include "semioctree/nbv.h"
 #include "semioctree/preprocess.h"
 #include "semioctree/registration.h"
@@ -25,19 +26,32 @@ struct SurveyParams {
   SurveyMapParams map;
   PreprocessParams preprocess;
   RegistrationParams registration;
-  NbvParams nbv;  // its room, grid anchor and progress are set by the survey
+  GlobalAlignParams global_align;  // scans without a pose (ScanPlacement::kNoPose)
+  NbvParams nbv;                   // its room, grid anchor and progress are set by the survey
   RobotGeometry robot;
   double stop_percent = 0.1;   // Eq 5 threshold, %
   bool room_only = true;       // targets and Eq 5 inside room_box (false: the whole map)
   std::size_t max_scans = 10;  // Survey::run's scan budget (at least 1)
 };
 
+// What the reported pose of a scan is worth. The first scan is always placed by its
+// pose (the origin without one): it defines the survey frame.
+enum class ScanPlacement {
+  kRefine,  // a guess (odometry): refined by ICP against the scans before
+  kExact,   // taken as it is (a pose surveyed or given by the user)
+  kNoPose,  // none: global alignment against the scans before, then ICP (x, y, yaw unused)
+};
+
+// How a scan was placed (ScanRecord::placed_by).
+enum class PlacedBy { kPose, kPoseAndIcp, kGlobalAndIcp };
+const char* to_string(PlacedBy placed_by);  // "pose", "pose+icp", "global+icp"
+
 // One scan as the platform delivers it: points in the scanner frame and the planar pose
 // the platform reports (odometry, or the pose a user gave), survey frame.
 struct IncomingScan {
   Cloud::Ptr points;
   double x = 0, y = 0, yaw_deg = 0;
-  bool registered = true;  // refine by ICP against the scans before (never the first)
+  ScanPlacement placement = ScanPlacement::kRefine;
   // How far the reported pose can be wrong: a larger ICP correction is a false match
   // (0: no bound).
   double max_correction_m = 0, max_correction_deg = 0;
@@ -56,9 +70,11 @@ struct ScanRecord {
   double ceiling_height = 0, tilt_alpha_deg = 0, tilt_beta_deg = 0;  // preprocessing
   bool ceiling_found = false;  // else levelled by the floor alone (PreprocessResult)
   RoomHeightFrom height_from = RoomHeightFrom::kCeiling;
+  PlacedBy placed_by = PlacedBy::kPose;
   struct Registration {
     RegistrationResult icp;
-    double scanner_shift_m = 0;  // how far the correction moved the scanner
+    double scanner_shift_m = 0;  // how far ICP moved the scanner (from the pose or the guess)
+    std::optional<GlobalAlignResult> global;  // the guess of a scan without a pose
   };
   std::optional<Registration> registration;  // none for the first or a posed scan
   ScanUpdateReport update;
@@ -155,8 +171,9 @@ class Survey {
 
   // One scan through preprocess → register → update → NBV, reporting each stage.
   // `robot_position`: where the robot stands (default: under the scanner). Throws
-  // RegistrationError (the map is left as it was) when ICP fails or finds another floor,
-  // PreprocessError when the scan cannot be levelled.
+  // RegistrationError (the map is left as it was) when ICP or the global alignment fails
+  // (no placement, or an ambiguous one) or a scan finds another floor, PreprocessError
+  // when the scan cannot be levelled.
   const ScanRecord& add_scan(const IncomingScan& scan,
                              const std::optional<Point3>& robot_position = std::nullopt);
 

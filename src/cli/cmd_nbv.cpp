@@ -1,8 +1,9 @@
-// `semioctree nbv --cloud FILE... [--pose X,Y,Z,YAW ...] --out DIR`: one map
-// update and next best view for real scans. Each scan is placed by its --pose,
-// or by the pose its file carries (PTX header, PCD/PLY viewpoint); otherwise
-// the first scan is at the origin and the others are registered to it by ICP. Writes what a survey
-// writes (survey.json, scan_NN/).
+// `semioctree nbv --cloud FILE... [--pose X,Y,Z,YAW ...] [--global-align auto|on|off]
+// --out DIR`: one map update and next best view for real scans. Each scan is placed by
+// its --pose, or by the pose its file carries (PTX header, PCD/PLY viewpoint); otherwise
+// the first scan is at the origin and the others are placed by global alignment, then
+// ICP, against the scans before (docs/registration.md). Writes what a survey writes
+// (survey.json, scan_NN/).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -25,6 +26,7 @@ namespace {
 struct NbvOptions {
   std::vector<std::string> clouds;
   std::vector<std::string> poses;
+  std::string global_align = "auto";
   std::string out;
   PlanningOptions plan;
   double robot_radius = 0.5;
@@ -51,6 +53,9 @@ void run_nbv(const NbvOptions& o) {
     throw std::invalid_argument("give one --pose per --cloud file (" +
                                 std::to_string(o.clouds.size()) + " files, " +
                                 std::to_string(o.poses.size()) + " poses)");
+  if (o.global_align == "on" && !o.poses.empty())
+    throw std::invalid_argument(
+        "--global-align on places every scan after the first without its pose: give no --pose");
   check_scanner_limits(o.limits);
   {
     std::vector<NamedPath> inputs;
@@ -76,7 +81,20 @@ void run_nbv(const NbvOptions& o) {
   std::unique_ptr<Survey> survey;
   for (std::size_t i = 0; i < scans.size(); ++i) {
     const Scan& s = scans[i];
-    std::printf("scan %zu: %s\n", i, s.source.c_str());
+    // Placed by --pose or the file's pose (PTX header, PCD/PLY viewpoint); the first
+    // scan without one at the origin; the others without one (or all after the first
+    // with --global-align on) by global alignment then ICP, or with --global-align off
+    // by ICP from the origin.
+    const bool has_pose = !o.poses.empty() || s.pose_from_file;
+    const bool global =
+        i > 0 && (o.global_align == "on" || (o.global_align == "auto" && !has_pose));
+    const bool posed = !global && (has_pose || i == 0);
+    const char* how = global  ? (has_pose ? "its pose ignored (--global-align on): placed by "
+                                            "global alignment, then ICP"
+                                          : "no pose: placed by global alignment, then ICP")
+                      : posed ? (has_pose ? "placed by its pose" : "no pose: at the origin")
+                              : "no pose: ICP from the origin (--global-align off)";
+    std::printf("scan %zu: %s (%s)\n", i, s.source.c_str(), how);
     if (!survey) {
       // The robot's scanner height: the first scan's optical centre above its floor.
       if (o.scanner_height > 0) {
@@ -90,17 +108,16 @@ void run_nbv(const NbvOptions& o) {
       output = std::make_unique<SurveyOutput>(o.out, p);
       survey = std::make_unique<Survey>(p, output.get());
     }
-    // Placed by --pose, by the file (PTX header, PCD/PLY viewpoint), or, for
-    // the first scan, at the origin; any other scan is registered by ICP.
-    const bool posed = !o.poses.empty() || s.pose_from_file || i == 0;
-    if (posed) warn_if_tilted(s);
+    if (posed && has_pose) warn_if_tilted(s);
     IncomingScan in;
     in.points = s.points;
     in.points_raw = s.points->size() + s.invalid_dropped;
     in.x = posed ? s.pose.position().x() : 0.0;
     in.y = posed ? s.pose.position().y() : 0.0;
     in.yaw_deg = posed ? s.pose.yaw_deg() : 0.0;
-    in.registered = !posed;
+    in.placement = global  ? ScanPlacement::kNoPose
+                   : posed ? ScanPlacement::kExact
+                           : ScanPlacement::kRefine;
     in.from_robot = o.scanned_by_robot;
     try {
       output->scan_done(survey->add_scan(in), survey->map());
@@ -142,7 +159,8 @@ void add_nbv_command(CLI::App& app) {
       "nbv",
       "One map update and next best view for real scans: preprocess each scan, place it by its "
       "pose (--pose, or the pose its file carries: a PTX header, a PCD/PLY viewpoint), or else "
-      "register it to the first by ICP, build the semioctree "
+      "(the first scan at the origin) place it against the scans before by global alignment "
+      "and ICP, build the semioctree "
       "(occupancy, doors and windows, occlusion), score the candidate positions and report the "
       "next best view and the stop percentage. Returns outside the scanner's limits (--min-range, "
       "--elevation-min: on a robot, the lowest elevation that clears its body) are dropped: they "
@@ -154,7 +172,16 @@ void add_nbv_command(CLI::App& app) {
   cmd->add_option("--pose", o->poses,
                   "scanner pose X,Y,Z[,YAW_DEG] of each --cloud in the survey frame (default: "
                   "the pose the file carries (PTX header, PCD/PLY viewpoint); without one, the "
-                  "first scan at the origin and the others registered by ICP)");
+                  "first scan at the origin and the others placed by --global-align)");
+  cmd->add_option("--global-align", o->global_align,
+                  "scans after the first: auto = those without a pose are placed by global "
+                  "alignment (a search over x, y and heading of the walls' outline, then ICP; "
+                  "refused when no placement overlaps enough or two fit alike, e.g. a "
+                  "symmetric empty room); on = every one is, its pose ignored (not with "
+                  "--pose); off = those without a pose are refined by ICP from the origin "
+                  "(scans taken close to the first, facing the same way)")
+      ->check(CLI::IsMember({"auto", "on", "off"}))
+      ->capture_default_str();
   cmd->add_option("--out", o->out,
                   "output directory (a survey.json and scan_NN/ folders of an earlier run "
                   "there are replaced)")

@@ -91,6 +91,12 @@ void SurveyOutput::stage_done(SurveyStage stage, const ScanRecord& s) {
       break;
     case SurveyStage::kRegistered: {
       const RegistrationResult& r = s.registration->icp;
+      if (const auto& g = s.registration->global)
+        std::printf(
+            "  global alignment: %zu yaws of %.2f°, %zu distinct placements, %zu screened by "
+            "ICP; chosen overlap %.0f %% (runner-up %.0f %%) [%.2f s]\n",
+            g->yaw_steps, g->yaw_step_deg, g->candidates, g->screened.size(),
+            100 * g->chosen_overlap, 100 * g->runner_up_overlap, g->seconds);
       std::printf(
           "  register: ICP moved the scanner %.3f m, %.2f°; fitness %.2e m², overlap %.0f %% "
           "[%.2f s]\n",
@@ -165,6 +171,7 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
   json r;
   r["index"] = s.index;
   r["pose"] = pose_json(s.scanner_to_survey);
+  r["placed_by"] = to_string(s.placed_by);
   r["points_raw"] = s.points_raw;
   r["points_kept"] = s.points_kept;
   r["points_outside_limits"] = s.points_outside_limits;
@@ -196,6 +203,28 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
                          {"correction_m", s.registration->scanner_shift_m},
                          {"correction_deg", icp.rotation_deg},
                          {"iterations", icp.iterations}};
+    if (const auto& g = s.registration->global) {
+      json screened = json::array();
+      for (const GlobalHypothesis& h : g->screened)
+        screened.push_back({{"x", h.x},
+                            {"y", h.y},
+                            {"yaw_deg", h.yaw_deg},
+                            {"votes", h.votes},
+                            {"overlap", h.overlap}});
+      r["registration"]["global"] = {{"yaw_steps", g->yaw_steps},
+                                     {"yaw_step_deg", g->yaw_step_deg},
+                                     {"source_cells", g->source_cells},
+                                     {"target_cells", g->target_cells},
+                                     {"candidates", g->candidates},
+                                     {"screened", screened},
+                                     {"chosen_overlap", g->chosen_overlap},
+                                     {"runner_up_overlap", g->runner_up_overlap},
+                                     {"seconds_search", g->seconds_search},
+                                     {"seconds_screen", g->seconds_screen},
+                                     {"verified", g->verified},
+                                     {"seconds_verify", g->seconds_verify},
+                                     {"seconds", g->seconds}};
+    }
   } else {
     r["registration"] = nullptr;
   }
