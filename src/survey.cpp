@@ -33,6 +33,8 @@ const char* to_string(PlacedBy placed_by) {
       return "pose+icp";
     case PlacedBy::kGlobalAndIcp:
       return "global+icp";
+    case PlacedBy::kPoseGlobalAndIcp:
+      return "pose+global+icp";
   }
   return "?";
 }
@@ -89,7 +91,30 @@ double checked_scanner_shift(const RegistrationResult& r, const Eigen::Isometry3
   return shift;
 }
 
+// The global alignment's placement as a correction of the reported pose, for
+// checked_scanner_shift.
+RegistrationResult as_correction(const GlobalAlignResult& g) {
+  RegistrationResult r = g.icp;
+  r.correction = g.transform;
+  r.rotation_deg = Eigen::AngleAxisd(g.transform.linear()).angle() * 180.0 / M_PI;
+  return r;
+}
+
 }  // namespace
+
+GlobalAlignResult Survey::recover_by_global_alignment(const Cloud& placed,
+                                                      const Eigen::Isometry3d& place,
+                                                      const IncomingScan& in,
+                                                      const std::string& pose_failure) const {
+  try {
+    GlobalAlignResult g =
+        global_align(placed, map_.merged_cloud(), params_.registration, params_.global_align);
+    checked_scanner_shift(as_correction(g), place, in);
+    return g;
+  } catch (const RegistrationError& e) {
+    throw RegistrationError(pose_failure + "; nor by a global alignment: " + e.what());
+  }
+}
 
 const ScanRecord& Survey::add_scan(const IncomingScan& in,
                                    const std::optional<Point3>& robot_position) {
@@ -134,10 +159,23 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
         reg.global = std::move(g);
         rec.placed_by = PlacedBy::kGlobalAndIcp;
       } else {
-        reg.icp = register_scan(*guess, map_.merged_cloud(), params_.registration);
-        reg.scanner_shift_m = checked_scanner_shift(reg.icp, place, in);
-        correction = reg.icp.correction;
-        rec.placed_by = PlacedBy::kPoseAndIcp;
+        try {
+          reg.icp = register_scan(*guess, map_.merged_cloud(), params_.registration);
+          reg.scanner_shift_m = checked_scanner_shift(reg.icp, place, in);
+          correction = reg.icp.correction;
+          rec.placed_by = PlacedBy::kPoseAndIcp;
+        } catch (const RegistrationError& from_pose) {
+          // The reported pose may be off by more than ICP reaches (a long drive, a turn):
+          // recover as a robot would, by a global alignment, kept only within what the
+          // pose can be wrong by.
+          GlobalAlignResult g = recover_by_global_alignment(*guess, place, in, from_pose.what());
+          reg.icp = g.icp;
+          reg.scanner_shift_m = checked_scanner_shift(as_correction(g), place, in);
+          correction = g.transform;
+          reg.global = std::move(g);
+          reg.pose_icp_failure = from_pose.what();
+          rec.placed_by = PlacedBy::kPoseGlobalAndIcp;
+        }
       }
     } catch (const RegistrationError& e) {
       throw RegistrationError("scan " + std::to_string(rec.index) + " could not be registered (" +

@@ -43,8 +43,11 @@ enum class ScanPlacement {
 };
 
 // How a scan was placed (ScanRecord::placed_by).
-enum class PlacedBy { kPose, kPoseAndIcp, kGlobalAndIcp };
-const char* to_string(PlacedBy placed_by);  // "pose", "pose+icp", "global+icp"
+// kPoseGlobalAndIcp: ICP from the reported pose failed, and the global alignment found a
+// placement within what the platform's pose can be wrong by (IncomingScan::max_correction_*).
+enum class PlacedBy { kPose, kPoseAndIcp, kGlobalAndIcp, kPoseGlobalAndIcp };
+// "pose", "pose+icp", "global+icp", "pose+global+icp"
+const char* to_string(PlacedBy placed_by);
 
 // One scan as the platform delivers it: points in the scanner frame and the planar pose
 // the platform reports (odometry, or the pose a user gave), survey frame.
@@ -75,6 +78,9 @@ struct ScanRecord {
     RegistrationResult icp;
     double scanner_shift_m = 0;  // how far ICP moved the scanner (from the pose or the guess)
     std::optional<GlobalAlignResult> global;  // the guess of a scan without a pose
+    // Why ICP from the reported pose failed, when the global alignment recovered the
+    // scan (PlacedBy::kPoseGlobalAndIcp); empty otherwise.
+    std::string pose_icp_failure;
   };
   std::optional<Registration> registration;  // none for the first or a posed scan
   ScanUpdateReport update;
@@ -187,6 +193,12 @@ class Survey {
   const SurveyParams& params() const { return params_; }
 
  private:
+  // `placed` (a scan placed by its reported pose `place`) aligned globally to the merged
+  // cloud, kept only within the pose's bounds; else RegistrationError with both reasons.
+  GlobalAlignResult recover_by_global_alignment(const Cloud& placed, const Eigen::Isometry3d& place,
+                                                const IncomingScan& in,
+                                                const std::string& pose_failure) const;
+
   SurveyParams params_;
   SurveyObserver* observer_;
   SurveyObserver silent_;

@@ -91,6 +91,9 @@ void SurveyOutput::stage_done(SurveyStage stage, const ScanRecord& s) {
       break;
     case SurveyStage::kRegistered: {
       const RegistrationResult& r = s.registration->icp;
+      if (!s.registration->pose_icp_failure.empty())
+        std::printf("  ICP from the reported pose failed (%s); recovered by a global alignment\n",
+                    s.registration->pose_icp_failure.c_str());
       if (const auto& g = s.registration->global)
         std::printf(
             "  global alignment: %zu yaws of %.2f°, %zu distinct placements, %zu screened by "
@@ -203,6 +206,8 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
                          {"correction_m", s.registration->scanner_shift_m},
                          {"correction_deg", icp.rotation_deg},
                          {"iterations", icp.iterations}};
+    if (!s.registration->pose_icp_failure.empty())
+      r["registration"]["pose_icp_failure"] = s.registration->pose_icp_failure;
     if (const auto& g = s.registration->global) {
       json screened = json::array();
       for (const GlobalHypothesis& h : g->screened)
