@@ -96,14 +96,24 @@ TEST_P(MapNbvOnUserMaps, FindsCandidatesAndTheOpenings) {
       "%s: %d candidates, nbv (%.2f, %.2f, %.2f), openings %zu found / %zu true, P %.2f R %.2f\n",
       name.c_str(), j["candidates"].get<int>(), nbv.x(), nbv.y(), nbv.z(), found.size(),
       truths.size(), m.precision, m.recall);
+  for (std::size_t i = 0; i < found.size(); ++i)
+    std::printf("  found %s %.2f x %.2f sill %.2f at (%.2f, %.2f) IoU %.2f\n",
+                to_string(found[i].kind), found[i].width, found[i].height, found[i].sill,
+                found[i].corners[0].x(), found[i].corners[0].y(), m.detection_iou[i]);
+  for (std::size_t i = 0; i < truths.size(); ++i)
+    std::printf("  true %s %.2f x %.2f at (%.2f, %.2f) IoU %.2f\n",
+                truths[i].kind == sim::OpeningKind::door ? "door" : "window", truths[i].width,
+                truths[i].height, truths[i].corners[0].x(), truths[i].corners[0].y(),
+                m.truth_iou[i]);
   EXPECT_GE(m.precision, 0.9) << r.all();
   EXPECT_GE(m.recall, 0.9) << r.all();
 }
 
 INSTANTIATE_TEST_SUITE_P(Maps, MapNbvOnUserMaps,
                          ::testing::Values(MapCase{"room-1", 0.08}, MapCase{"room-2", 0.1},
-                                           MapCase{"room-3", 0.05},
-                                           MapCase{"one-door-window.scene.json", 0.08}),
+                                           MapCase{"room-3", 0.08}, MapCase{"room-4", 0.1},
+                                           MapCase{"room-5", 0.08}, MapCase{"room-6", 0.1},
+                                           MapCase{"room-7", 0.08}, MapCase{"room-8", 0.08}),
                          [](const auto& info) {
                            std::string n =
                                info.param.scene.substr(0, info.param.scene.find('.')) + "_" +

@@ -151,7 +151,8 @@ std::vector<std::shared_ptr<const ReturnDirections>> returns_from_map(
 // An OctoMap map holds no doors or windows: find them as `classify` does, in
 // its occupied leaves, then make the free space seen through them out.
 std::optional<std::vector<DetectedOpening>> find_openings_in_map(
-    SemiOcTree& tree, const MapNbvOptions& o, const std::vector<Point3>& scanners,
+    SemiOcTree& tree, const octomap::OcTree& map, const MapNbvOptions& o,
+    const std::vector<Point3>& scanners,
     const std::vector<std::shared_ptr<const ReturnDirections>>& returns) {
   if (o.skip_openings) return std::nullopt;
   const auto t0 = std::chrono::steady_clock::now();
@@ -166,6 +167,15 @@ std::optional<std::vector<DetectedOpening>> find_openings_in_map(
   }
   OpeningsReport rep;
   std::vector<DetectedOpening> found = detect_openings_in_map(tree, *ceiling, scanners, {}, &rep);
+  // Seen through is not open: the map must hold the free space its rays carved through it.
+  std::vector<DetectedOpening> kept, not_carved;
+  std::vector<double> shares;
+  for (const DetectedOpening& d : found) {
+    const double share = share_carved_behind(d, map, scanners);
+    (2 * share >= 1 ? kept : not_carved).push_back(d);
+    if (2 * share < 1) shares.push_back(share);
+  }
+  found = std::move(kept);
   label_openings(tree, found);
   std::printf(
       "doors and windows (ceiling %.2f m%s): %zu walls, %zu candidates, %zu confirmed, %zu "
@@ -175,6 +185,13 @@ std::optional<std::vector<DetectedOpening>> find_openings_in_map(
   for (const DetectedOpening& d : found)
     std::printf("  %-6s %.2f x %.2f m, sill %.2f m, line of sight %.0f %%\n", to_string(d.kind),
                 d.width, d.height, d.sill, 100 * d.los_fraction);
+  for (std::size_t i = 0; i < not_carved.size(); ++i)
+    std::printf(
+        "  not an opening: %s %.2f x %.2f m, sill %.2f m at (%.2f, %.2f): the map holds free space "
+        "behind only %.0f %% of it (under half: a shadow or a gap in the wall's surface)\n",
+        to_string(not_carved[i].kind), not_carved[i].width, not_carved[i].height,
+        not_carved[i].sill, not_carved[i].corners[0].x(), not_carved[i].corners[0].y(),
+        100 * shares[i]);
   if (!found.empty()) {
     OcclusionParams op;
     op.scope = OcclusionScope::kFreeThroughOpenings;
@@ -254,7 +271,7 @@ void run_map_nbv(const MapNbvOptions& o) {
           "occluded, %zu out [%.2f s]\n",
           views.size(), occ.empty, occ.occluded, occ.out, seconds_since(t1));
     }
-    openings = find_openings_in_map(*tree, o, scanners, returns);
+    openings = find_openings_in_map(*tree, *occupancy, o, scanners, returns);
   } else {
     throw std::invalid_argument(o.map + ": a " + file.type +
                                 " holds no occupancy (give a .bt, an OcTree .ot or a SemiOcTree "
