@@ -65,16 +65,20 @@ TEST_P(MapNbvOnUserMaps, FindsCandidatesAndTheOpenings) {
   const std::string name = c.scene + "-" + std::to_string(int(std::lround(1000 * c.resolution)));
   const std::string bt = (scratch() / (name + ".bt")).string();
   ASSERT_TRUE(map.tree->writeBinary(bt));
-  map.tree->writeBinary("/tmp/mapnbv_maps/" + name + ".bt");  // TEMP
 
-  std::string args = "map-nbv --map " + bt + " --out " + (scratch() / name).string();
+  // The user's robot and scanner: its radius and the scanner's limits, as the scene has them.
+  const sim::ScannerConfig& sc = scene.scanner;
+  std::string args = "map-nbv --map " + bt + " --out " + (scratch() / name).string() +
+                     " --robot-radius " + std::to_string(scene.robot.radius) + " --min-range " +
+                     std::to_string(sc.min_range) + " --max-range " + std::to_string(sc.max_range) +
+                     " --elevation-min " + std::to_string(sc.elevation_min_deg) +
+                     " --elevation-max " + std::to_string(sc.elevation_max_deg);
   char xyz[96];
   for (const Eigen::Vector3d& s : map.scanners) {
     std::snprintf(xyz, sizeof xyz, " --scanner %.3f,%.3f,%.3f", s.x(), s.y(), s.z());
     args += xyz;
   }
   const CliRun r = run_cli(args);
-  std::printf("ARGS %s\n", args.c_str());  // TEMP
   ASSERT_EQ(r.exit_code, 0) << r.all();
   std::ifstream in(scratch() / name / "nbv.json");
   const auto j = nlohmann::json::parse(in);
@@ -110,10 +114,8 @@ TEST_P(MapNbvOnUserMaps, FindsCandidatesAndTheOpenings) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Maps, MapNbvOnUserMaps,
-                         ::testing::Values(MapCase{"room-1", 0.08}, MapCase{"room-2", 0.1},
-                                           MapCase{"room-3", 0.08}, MapCase{"room-4", 0.1},
-                                           MapCase{"room-5", 0.08}, MapCase{"room-6", 0.1},
-                                           MapCase{"room-7", 0.08}, MapCase{"room-8", 0.08}),
+                         ::testing::Values(MapCase{"room-1", 0.08}, MapCase{"room-3", 0.08},
+                                           MapCase{"room-4", 0.1}, MapCase{"room-8", 0.08}),
                          [](const auto& info) {
                            std::string n =
                                info.param.scene.substr(0, info.param.scene.find('.')) + "_" +

@@ -55,7 +55,8 @@ std::uint64_t packed_cell(const octomap::OcTreeKey& k) {
 // enclosed_speck_leaves, docs/nbv.md): face-connected components of unknown or
 // occluded octants, every one at most `max_leaves` leaves a side, that fit in a cube
 // of `max_leaves` leaves and whose face neighbours outside the component are all free
-// space (empty, out, door or window; no occupied leaf, nothing outside the map). Only
+// space (empty, out, door or window; no occupied leaf, nothing outside the map), but for
+// the floor's leaves under it (rays grazing the floor leave gaps just above it). Only
 // components reaching a leaf layer below `layers` are looked at.
 std::unordered_set<std::uint64_t> enclosed_specks(const SemiOcTree& tree, std::int64_t layers,
                                                   int max_leaves) {
@@ -108,6 +109,8 @@ std::unordered_set<std::uint64_t> enclosed_specks(const SemiOcTree& tree, std::i
             speck = false;  // the map's edge: nothing carved beyond
           else if (carved(on->label()))
             continue;
+          else if (a == 2 && d < 0 && on->label() == Label::kOccupied && leaf_cell(n.k[2]) <= 0)
+            continue;  // the floor under it (its layer, z = 0 after levelling)
           else if (!unobserved(on->label()) || (std::int64_t(1) << (k - on->level)) > max_leaves)
             speck = false;  // an occupied leaf, or unobserved space too large
           else
