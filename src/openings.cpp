@@ -451,6 +451,36 @@ std::vector<DetectedOpening> detect_openings_in_map(const SemiOcTree& tree, doub
   return detect_openings(centres, ceiling_height, tree, scanner_positions, p, report);
 }
 
+double share_carved_behind(const DetectedOpening& o, const octomap::OcTree& map,
+                           const std::vector<Point3>& scanner_positions) {
+  const double r = map.getResolution();
+  const Eigen::Vector3d along = o.corners[1] - o.corners[0];
+  const Eigen::Vector3d up = o.corners[3] - o.corners[0];
+  const Eigen::Vector3d centre = 0.25 * (o.corners[0] + o.corners[1] + o.corners[2] + o.corners[3]);
+  // Beyond: the side of the plane with fewer scanners (the room is where they stand).
+  Eigen::Vector3d beyond = o.wall_normal;
+  int facing = 0;
+  for (const Point3& s : scanner_positions)
+    facing += (Eigen::Vector3d(s.x, s.y, s.z) - centre).dot(beyond) > 0 ? 1 : -1;
+  if (facing > 0) beyond = -beyond;
+  const double step = 0.5 * r;
+  const int nu = std::max(1, int(std::ceil(along.norm() / step)));
+  const int nv = std::max(1, int(std::ceil(up.norm() / step)));
+  std::size_t carved = 0;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const Eigen::Vector3d q = o.corners[0] + along * ((i + 0.5) / nu) + up * ((j + 0.5) / nv);
+      bool free = false;
+      for (double depth : {1.5 * r, 2.5 * r}) {
+        const Eigen::Vector3d b = q + depth * beyond;
+        const octomap::OcTreeNode* n = map.search(b.x(), b.y(), b.z());
+        free = free || (n && !map.isNodeOccupied(n));
+      }
+      carved += free;
+    }
+  return double(carved) / double(nu * nv);
+}
+
 std::size_t label_openings(SemiOcTree& tree, const std::vector<DetectedOpening>& openings) {
   std::set<std::tuple<unsigned, unsigned, unsigned>> done;
   std::size_t labelled = 0;

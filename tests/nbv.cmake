@@ -14,3 +14,11 @@ if(TARGET semioctree_sim)
     target_include_directories(bench_nbv PRIVATE ${PROJECT_SOURCE_DIR})
   endif()
 endif()
+# map-nbv on maps built as OctoMap users build them (sparse scans of generated and built-in
+# scenes along a path, insertPointCloud, the floor shifted), judged against the scenes.
+if(TARGET semioctree_sim_platform)
+  semioctree_add_test(test_map_nbv_user_maps SOURCES test_map_nbv_user_maps.cpp
+                      LIBS semioctree_sim_platform nlohmann_json::nlohmann_json)
+  target_include_directories(test_map_nbv_user_maps PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+  add_dependencies(test_map_nbv_user_maps semioctree_cli)
+endif()

@@ -2,6 +2,9 @@
 // map, pruned free and occupied nodes, the coarse grid over the map's extent, bad sizes.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <memory>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -130,6 +133,48 @@ TEST(Import, RefusesMapsThatWouldMakeMoreOctantsThanAllowed) {
   far.updateNode(-3000.0, -3000.0, -3000.0, false);
   far.updateNode(3000.0, 3000.0, 3000.0, false);
   EXPECT_THROW(from_occupancy_octree(far, 0.8), std::length_error);
+}
+
+// The coarse size nearest 0.8 m: 0.64 for 0.08 m leaves (0.64 and 1.28 are 0.32 and 0.68
+// octaves away), 0.8 for 0.1 and 0.05; a tie (0.2·2·√2 m is half an octave from both 0.4
+// and 0.8) goes to the larger.
+TEST(Import, NearestCoarseSize) {
+  EXPECT_DOUBLE_EQ(nearest_coarse_size(0.08, 0.8), 0.64);
+  EXPECT_DOUBLE_EQ(nearest_coarse_size(0.1, 0.8), 0.8);
+  EXPECT_DOUBLE_EQ(nearest_coarse_size(0.05, 0.8), 0.8);
+  EXPECT_DOUBLE_EQ(nearest_coarse_size(0.2, 0.2 * 2 * std::sqrt(2.0)), 0.8);
+}
+
+// A floor at z = −0.15 m under a ceiling, with a few specks below it: the floor's layer is
+// found (not the specks'), the map moved up by whole leaves keeps every node's value.
+TEST(Import, FloorFoundAndMapShiftedByWholeLeaves) {
+  octomap::OcTree map(0.08);
+  for (double x = 0.04; x < 4; x += 0.08)
+    for (double y = 0.04; y < 3; y += 0.08) {
+      map.updateNode(x, y, -0.15, true);  // the floor, in the layer [−0.16, −0.08)
+      map.updateNode(x, y, 2.6, true);    // the ceiling
+      map.updateNode(x, y, 1.0, false);   // free space
+    }
+  for (double x = 0.04; x < 4; x += 0.8) map.updateNode(x, 1.0, -0.5, true);  // specks below
+  const std::optional<OccupancyFloor> f = find_occupancy_floor(map);
+  ASSERT_TRUE(f);
+  EXPECT_EQ(f->shift_layers, 2);
+  EXPECT_NEAR(f->z, -0.16, 1e-12);
+  const std::unique_ptr<octomap::OcTree> up = shifted_by_layers(map, f->shift_layers);
+  const octomap::OcTreeNode* floor = up->search(2.0, 1.5, -0.15 + 0.16);
+  ASSERT_NE(floor, nullptr);
+  EXPECT_TRUE(up->isNodeOccupied(floor));
+  ASSERT_NE(up->search(2.0, 1.5, 1.16), nullptr);
+  EXPECT_FALSE(up->isNodeOccupied(up->search(2.0, 1.5, 1.16)));
+  EXPECT_EQ(up->search(2.0, 1.5, -0.15), nullptr);  // nothing left where the floor was
+  EXPECT_FALSE(find_occupancy_floor(octomap::OcTree(0.1)));
+  // A floor on a layer boundary (z = 0, noise on both sides) is not moved.
+  octomap::OcTree level(0.1);
+  for (double x = 0.05; x < 3; x += 0.1)
+    for (double y = 0.05; y < 3; y += 0.1)
+      level.updateNode(x, y, (int(x * 20) % 2) ? 0.01 : -0.01, true);
+  ASSERT_TRUE(find_occupancy_floor(level));
+  EXPECT_EQ(find_occupancy_floor(level)->shift_layers, 0);
 }
 
 }  // namespace

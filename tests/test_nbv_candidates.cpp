@@ -315,5 +315,37 @@ TEST(Nbv, BlindZoneRuleGivesTheSameCandidatesOnAPrunedMap) {
   }
 }
 
+// An imported map's unknown specks (enclosed_speck_leaves): a leaf or two of unknown or
+// occluded space with free space on every side (or the floor under it) does not block
+// the cylinder; a larger unknown block, or one touching an obstacle, still does. Off by
+// default (the survey's own maps).
+TEST(Nbv, EnclosedUnknownSpecksDoNotBlockTheCylinder) {
+  Map m(5, 5, 3);
+  m.walls(4.0, 4.0, 2.4);
+  m.leaf(2.025, 2.025, 1.025, Label::kUnknown);                    // a speck in mid-air
+  m.leaves({2.0, 2.0, 0.5}, {2.1, 2.05, 0.55}, Label::kOccluded);  // two leaves
+  m.leaf(2.025, 2.025, 0.025, Label::kOccupied);                   // the floor's leaf …
+  m.leaf(2.025, 2.025, 0.075, Label::kUnknown);                    // … and a speck on it
+  m.leaves({1.0, 3.0, 0.5}, {1.15, 3.15, 0.65}, Label::kUnknown);  // 3 leaves a side
+  m.leaves({3.0, 1.0, 1.0}, {3.05, 1.05, 1.1}, Label::kUnknown);   // on a box's top:
+  m.leaf(3.025, 1.025, 0.975, Label::kOccupied);
+  NbvParams p;
+  p.candidate_spacing = 0.1;
+  RobotGeometry robot;
+  robot.radius = 0.3;
+  const Point3 start(1.0, 1.0, 0);
+  CandidateReport off, on;
+  const auto strict = find_candidates(m.t, robot, start, {}, p, &off);
+  EXPECT_EQ(off.specks_freed, 0u);
+  EXPECT_FALSE(has_candidate_near(strict, 2.05, 2.05, 0.06));
+  p.enclosed_speck_leaves = 2;
+  const auto freed = find_candidates(m.t, robot, start, {}, p, &on);
+  EXPECT_EQ(on.specks_freed, 4u);  // 1 + 2 + 1 leaves
+  EXPECT_TRUE(has_candidate_near(freed, 2.05, 2.05, 0.06));
+  EXPECT_FALSE(has_candidate_near(freed, 1.05, 3.05, 0.06));  // the 3-leaf block
+  EXPECT_FALSE(has_candidate_near(freed, 3.05, 1.05, 0.06));  // the box
+  EXPECT_GT(freed.size(), strict.size());
+}
+
 }  // namespace
 }  // namespace semioctree

@@ -5,6 +5,8 @@
 // The rules and their reasons: docs/occlusion.md.
 #pragma once
 
+#include <octomap/OcTree.h>
+
 #include <Eigen/Core>
 #include <array>
 #include <cstddef>
@@ -125,6 +127,15 @@ std::vector<DetectedOpening> detect_openings_in_map(const SemiOcTree& tree, doub
                                                     const std::vector<Point3>& scanner_positions,
                                                     const OpeningParams& params = {},
                                                     OpeningsReport* report = nullptr);
+
+// The share of an opening's rectangle through which an occupancy map (OctoMap: only
+// rays that returned carve free space) holds free space just behind the wall: sampled at
+// half-leaf steps over the rectangle, 1.5 and 2.5 leaves beyond its plane on the side
+// away from the scanners, a sample counts if either point is a free node. Rays that went
+// through a real opening carved the space in and behind it; behind a wall's shadow, or a
+// gap that sparse rays left in a wall's surface, the map holds nothing (docs/occlusion.md).
+double share_carved_behind(const DetectedOpening& opening, const octomap::OcTree& map,
+                           const std::vector<Point3>& scanner_positions);
 
 // Labels the leaf octants that the hole's rectangle passes through door or
 // window; occupied leaves (the points of a jamb) keep their label. Returns the

@@ -3,8 +3,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -116,6 +118,75 @@ std::unique_ptr<SemiOcTree> from_occupancy_octree(const octomap::OcTree& map, do
   tree->prune();
   if (report) *report = rep;
   return tree;
+}
+
+double nearest_coarse_size(double resolution, double wanted) {
+  double best = resolution;
+  for (unsigned k = 0; k <= SemiOcTree::kMaxLeafLevel; ++k) {
+    const double size = resolution * double(1u << k);
+    const double d = std::abs(std::log2(size / wanted)), db = std::abs(std::log2(best / wanted));
+    if (d <= db + 1e-12) best = size;  // a tie goes to the larger size
+  }
+  return best;
+}
+
+std::optional<OccupancyFloor> find_occupancy_floor(const octomap::OcTree& map) {
+  const unsigned max_depth = SemiOcTree::kTreeDepth;
+  const int origin = int(map.coordToKey(0.0));  // the key of layer 0
+  std::map<int, std::size_t> per_layer;         // layer → occupied leaves
+  for (auto it = map.begin_leafs(), end = map.end_leafs(); it != end; ++it) {
+    if (!map.isNodeOccupied(*it)) continue;
+    const int n = 1 << (max_depth - it.getDepth());  // leaves a side
+    const int first = int(it.getKey()[2]) - n / 2 - origin;
+    for (int z = first; z < first + n; ++z) per_layer[z] += std::size_t(n) * std::size_t(n);
+  }
+  if (per_layer.empty()) return std::nullopt;
+  std::size_t most = 0;
+  for (const auto& [layer, count] : per_layer) most = std::max(most, count);
+  for (const auto& [layer, count] : per_layer) {
+    if (4 * count < most) continue;
+    OccupancyFloor f;
+    f.shift_layers = -layer;
+    f.leaves = count;
+    const auto above = per_layer.find(layer + 1);
+    if (above != per_layer.end() && 4 * above->second >= count) {
+      f.shift_layers = -(layer + 1);  // on the boundary: layers −1 and 0 after the shift
+      f.leaves += above->second;
+    }
+    f.z = -f.shift_layers * map.getResolution();
+    return f;
+  }
+  return std::nullopt;  // not reached: the fullest layer passes
+}
+
+std::unique_ptr<octomap::OcTree> shifted_by_layers(const octomap::OcTree& map, int layers) {
+  auto out = std::make_unique<octomap::OcTree>(map.getResolution());
+  out->setOccupancyThres(map.getOccupancyThres());
+  out->setProbHit(map.getProbHit());
+  out->setProbMiss(map.getProbMiss());
+  out->setClampingThresMin(map.getClampingThresMin());
+  out->setClampingThresMax(map.getClampingThresMax());
+  const unsigned max_depth = SemiOcTree::kTreeDepth;
+  for (auto it = map.begin_leafs(), end = map.end_leafs(); it != end; ++it) {
+    const int n = 1 << (max_depth - it.getDepth());
+    const octomap::OcTreeKey c = it.getKey();
+    const float value = it->getLogOdds();
+    for (int dz = 0; dz < n; ++dz) {
+      const long z = long(c[2]) - n / 2 + dz + layers;
+      if (z < 0 || z > long(std::numeric_limits<octomap::key_type>::max()))
+        throw std::invalid_argument("shifting the map by " + std::to_string(layers) +
+                                    " layers moves it out of OctoMap's key range");
+      for (int dy = 0; dy < n; ++dy)
+        for (int dx = 0; dx < n; ++dx)
+          out->setNodeValue(
+              octomap::OcTreeKey(octomap::key_type(c[0] - n / 2 + dx),
+                                 octomap::key_type(c[1] - n / 2 + dy), octomap::key_type(z)),
+              value, true);
+    }
+  }
+  out->updateInnerOccupancy();
+  out->prune();
+  return out;
 }
 
 }  // namespace semioctree

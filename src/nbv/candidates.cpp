@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
+#include <unordered_set>
 #include <utility>
 
 #include "blind_zone.h"
@@ -45,6 +46,82 @@ Plane plane_over(const SemiOcTree& tree) {
   return p;
 }
 
+// Key of a leaf cell, packed for a hash set.
+std::uint64_t packed_cell(const octomap::OcTreeKey& k) {
+  return (std::uint64_t(k[0]) << 32) | (std::uint64_t(k[1]) << 16) | std::uint64_t(k[2]);
+}
+
+// The leaf cells of unknown or occluded specks enclosed in free space (NbvParams::
+// enclosed_speck_leaves, docs/nbv.md): face-connected components of unknown or
+// occluded octants, every one at most `max_leaves` leaves a side, that fit in a cube
+// of `max_leaves` leaves and whose face neighbours outside the component are all free
+// space (empty, out, door or window; no occupied leaf, nothing outside the map), but for
+// the floor's leaves under it (rays grazing the floor leave gaps just above it). Only
+// components reaching a leaf layer below `layers` are looked at.
+std::unordered_set<std::uint64_t> enclosed_specks(const SemiOcTree& tree, std::int64_t layers,
+                                                  int max_leaves) {
+  std::unordered_set<std::uint64_t> specks, not_specks;
+  if (max_leaves <= 0) return specks;
+  const unsigned k = tree.leaf_level();
+  auto unobserved = [](Label l) { return l == Label::kUnknown || l == Label::kOccluded; };
+  auto carved = [](Label l) {
+    return free_space(l) || l == Label::kOut || l == Label::kDoor || l == Label::kWindow;
+  };
+  tree.for_each_octant([&](const Octant& o) {
+    const std::int64_t size = std::int64_t(1) << (k - o.level);
+    if (!unobserved(o.label()) || size > max_leaves || leaf_cell(o.key.k[2]) >= layers) return;
+    if (specks.count(packed_cell(o.key)) || not_specks.count(packed_cell(o.key))) return;
+    // Flood the component through leaf cells; stop as soon as it is no speck.
+    std::vector<octomap::OcTreeKey> todo;
+    std::unordered_set<std::uint64_t> seen;
+    std::int64_t lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) lo[a] = hi[a] = o.key.k[a];
+    bool speck = true;
+    auto add = [&](const Octant& x) {  // every leaf cell of octant x
+      const int n = 1 << (k - x.level);
+      for (int dz = 0; dz < n; ++dz)
+        for (int dy = 0; dy < n; ++dy)
+          for (int dx = 0; dx < n; ++dx) {
+            octomap::OcTreeKey c = x.key;
+            c.k[0] = octomap::key_type(c.k[0] + dx);
+            c.k[1] = octomap::key_type(c.k[1] + dy);
+            c.k[2] = octomap::key_type(c.k[2] + dz);
+            if (!seen.insert(packed_cell(c)).second) continue;
+            todo.push_back(c);
+            for (int b = 0; b < 3; ++b) {
+              lo[b] = std::min<std::int64_t>(lo[b], c.k[b]);
+              hi[b] = std::max<std::int64_t>(hi[b], c.k[b]);
+              speck = speck && hi[b] - lo[b] < max_leaves;
+            }
+          }
+    };
+    add(o);
+    while (speck && !todo.empty()) {
+      const octomap::OcTreeKey c = todo.back();
+      todo.pop_back();
+      for (int a = 0; a < 3 && speck; ++a)
+        for (int d = -1; d <= 1 && speck; d += 2) {
+          octomap::OcTreeKey n = c;
+          n.k[a] = octomap::key_type(int(n.k[a]) + d);
+          if (seen.count(packed_cell(n))) continue;
+          const std::optional<Octant> on = tree.find_octant(n);
+          if (!on || !on->node)
+            speck = false;  // the map's edge: nothing carved beyond
+          else if (carved(on->label()))
+            continue;
+          else if (a == 2 && d < 0 && on->label() == Label::kOccupied && leaf_cell(n.k[2]) <= 0)
+            continue;  // the floor under it (its layer, z = 0 after levelling)
+          else if (!unobserved(on->label()) || (std::int64_t(1) << (k - on->level)) > max_leaves)
+            speck = false;  // an occupied leaf, or unobserved space too large
+          else
+            add(*on);
+        }
+    }
+    (speck ? specks : not_specks).insert(seen.begin(), seen.end());
+  });
+  return specks;
+}
+
 // 1 for each cell whose column holds an obstacle for the safety cylinder: the
 // border (outside the map is unknown space), columns without coarse voxels, and
 // occupied, unknown or occluded (unless blind, with the rule on) octants in
@@ -79,6 +156,8 @@ std::vector<std::uint8_t> obstacle_columns(const SemiOcTree& tree, const Plane& 
         if (double((cz + 1) * span) > clearance && !tree.find_coarse({cx, cy, int(cz)}))
           mark(cx * span, cy * span, span);
   const detail::ScannerLimits limits(params.limits);
+  const std::unordered_set<std::uint64_t> specks =
+      enclosed_specks(tree, layers, params.enclosed_speck_leaves);
   tree.for_each_octant([&](const Octant& o) {
     const std::int64_t size = std::int64_t(1) << (k - o.level);
     const std::int64_t z = leaf_cell(o.key.k[2]);
@@ -91,6 +170,10 @@ std::vector<std::uint8_t> obstacle_columns(const SemiOcTree& tree, const Plane& 
         return;
       }
     } else if (l != Label::kOccupied && l != Label::kUnknown) {
+      return;
+    }
+    if (l != Label::kOccupied && specks.count(packed_cell(o.key))) {
+      rep.specks_freed += std::size_t(size * size * size);
       return;
     }
     mark(leaf_cell(o.key.k[0]), leaf_cell(o.key.k[1]), size);

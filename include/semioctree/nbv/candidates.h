@@ -27,6 +27,7 @@ struct CandidateReport {
   std::size_t unreachable = 0;
   std::size_t feasible = 0;
   std::size_t blind_octants_freed = 0;  // occluded octants exempted by the blind-zone rule
+  std::size_t specks_freed = 0;  // leaves of enclosed specks (enclosed_speck_leaves) exempted
   bool robot_in_map = false;
 };
 

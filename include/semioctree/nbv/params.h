@@ -25,6 +25,11 @@ struct NbvParams {
   // score, the stop percentage and the blind zone of past scans.
   ScannerView limits;
   bool blind_zone_is_free = true;  // the blind-zone rule (docs/nbv.md; false: paper only)
+  // Unknown or occluded specks enclosed in free space do not block the safety cylinder:
+  // a face-connected component of such octants that fits in a cube of this many leaves
+  // a side and whose every face neighbour is free space (docs/nbv.md, "Specks in an
+  // imported map"). 0: off (the survey's own maps); map-nbv turns it on.
+  int enclosed_speck_leaves = 0;
   // The surveyed room (room_box): occluded space outside it is no target and
   // Eq 5 counts volumes inside it only. Empty: the whole map, as the paper reads.
   std::optional<RoomBox> room;

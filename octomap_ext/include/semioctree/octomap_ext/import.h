@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 
 #include "semioctree/octomap_ext/semioctree.h"
 
@@ -43,5 +44,29 @@ std::unique_ptr<SemiOcTree> from_occupancy_octree(const octomap::OcTree& map, do
                                                   Label unobserved = Label::kUnknown,
                                                   OccupancyImportReport* report = nullptr,
                                                   std::uint64_t max_octants = 0);
+
+// The coarse size for a map of leaf `resolution`: resolution · 2^k (k = 0 …
+// SemiOcTree::kMaxLeafLevel) nearest `wanted` in ratio (|log2(size / wanted)| least); of
+// two equally near, the larger (fewer coarse voxels).
+double nearest_coarse_size(double resolution, double wanted);
+
+// The floor of an occupancy map as a shift of its leaf layers (layer i: z ∈ [i·res,
+// (i+1)·res)). The floor is the lowest dense layer of occupied leaves: the lowest with
+// at least a quarter as many occupied leaves as the fullest layer (a floor or ceiling
+// spans the mapped area; a wall's layer holds only its perimeter, specks and points
+// below the floor are sparse). A surface lying on a layer boundary fills the layer
+// above too (at least a quarter as much): then the floor is that boundary.
+struct OccupancyFloor {
+  int shift_layers = 0;    // add to every z key: the floor then lies in layer 0 or on z = 0
+  double z = 0;            // the floor's height in the map's frame: −shift_layers · res
+  std::size_t leaves = 0;  // occupied leaves in the floor's layer(s)
+};
+// Nullopt when the map holds no occupied leaf.
+std::optional<OccupancyFloor> find_occupancy_floor(const octomap::OcTree& map);
+
+// A copy of `map` moved up by `layers` leaf layers (z keys + layers): the same nodes
+// and log-odds, no resampling. Throws std::invalid_argument if a node would leave the
+// key range.
+std::unique_ptr<octomap::OcTree> shifted_by_layers(const octomap::OcTree& map, int layers);
 
 }  // namespace semioctree
