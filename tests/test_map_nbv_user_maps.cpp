@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <ostream>
 #include <string>
 
 #include "semioctree/sim/ground_truth.h"
@@ -46,6 +47,10 @@ struct MapCase {
   std::string scene;  // a generated room "room-<seed>", or a built-in scene's file name
   double resolution;
 };
+// How ctest and gtest name a case in their output ("room-1 at 0.08 m").
+void PrintTo(const MapCase& c, std::ostream* os) {
+  *os << c.scene << " at " << c.resolution << " m";
+}
 
 sim::Scene scene_of(const MapCase& c) {
   if (c.scene.rfind("room-", 0) == 0)
