@@ -105,11 +105,12 @@ RegistrationResult as_correction(const GlobalAlignResult& g) {
 GlobalAlignResult Survey::recover_by_global_alignment(const Cloud& placed,
                                                       const Eigen::Isometry3d& place,
                                                       const IncomingScan& in,
-                                                      const std::string& pose_failure) const {
+                                                      const std::string& pose_failure,
+                                                      double* scanner_shift_m) const {
   try {
     GlobalAlignResult g =
         global_align(placed, map_.merged_cloud(), params_.registration, params_.global_align);
-    checked_scanner_shift(as_correction(g), place, in);
+    *scanner_shift_m = checked_scanner_shift(as_correction(g), place, in);
     return g;
   } catch (const RegistrationError& e) {
     throw RegistrationError(pose_failure + "; nor by a global alignment: " + e.what());
@@ -168,9 +169,9 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
           // The reported pose may be off by more than ICP reaches (a long drive, a turn):
           // recover as a robot would, by a global alignment, kept only within what the
           // pose can be wrong by.
-          GlobalAlignResult g = recover_by_global_alignment(*guess, place, in, from_pose.what());
+          GlobalAlignResult g = recover_by_global_alignment(*guess, place, in, from_pose.what(),
+                                                            &reg.scanner_shift_m);
           reg.icp = g.icp;
-          reg.scanner_shift_m = checked_scanner_shift(as_correction(g), place, in);
           correction = g.transform;
           reg.global = std::move(g);
           reg.pose_icp_failure = from_pose.what();

@@ -194,10 +194,12 @@ class Survey {
 
  private:
   // `placed` (a scan placed by its reported pose `place`) aligned globally to the merged
-  // cloud, kept only within the pose's bounds; else RegistrationError with both reasons.
+  // cloud, kept only within the pose's bounds (the scanner's shift goes to
+  // `scanner_shift_m`); else RegistrationError with both reasons.
   GlobalAlignResult recover_by_global_alignment(const Cloud& placed, const Eigen::Isometry3d& place,
                                                 const IncomingScan& in,
-                                                const std::string& pose_failure) const;
+                                                const std::string& pose_failure,
+                                                double* scanner_shift_m) const;
 
   SurveyParams params_;
   SurveyObserver* observer_;
