@@ -46,6 +46,11 @@ std::vector<DetectedOpening> read_openings(const std::string& path) {
 struct MapCase {
   std::string scene;  // a generated room "room-<seed>", or a built-in scene's file name
   double resolution;
+  int positions = 3;  // scan positions along the path the map was made from
+  // The NBV lies in the room the map was made in. A map of a corridor holds its offices
+  // too, seen through their doors, and nothing tells map-nbv that only the corridor is
+  // to be surveyed: there the NBV may lie in any room the robot reaches.
+  bool nbv_in_start_room = true;
 };
 // How ctest and gtest name a case in their output ("room-1 at 0.08 m").
 void PrintTo(const MapCase& c, std::ostream* os) {
@@ -66,6 +71,7 @@ TEST_P(MapNbvOnUserMaps, FindsCandidatesAndTheOpenings) {
   const sim::GroundTruth truth(scene);
   testing::OctomapUserMapOptions uo;
   uo.resolution = c.resolution;
+  uo.positions = c.positions;
   const testing::OctomapUserMap map = testing::make_octomap_user_map(scene, truth, uo);
   const std::string name = c.scene + "-" + std::to_string(int(std::lround(1000 * c.resolution)));
   const std::string bt = (scratch() / (name + ".bt")).string();
@@ -95,16 +101,21 @@ TEST_P(MapNbvOnUserMaps, FindsCandidatesAndTheOpenings) {
   EXPECT_NEAR(nbv.z() - uo.floor_z, scene.scanner.height, 0.5 * c.resolution) << r.all();
   const sim::FloorPlan plan = truth.floor_plan(0.05);
   EXPECT_TRUE(plan.reachable_near(nbv.head<2>())) << nbv.transpose() << "\n" << r.all();
-  EXPECT_EQ(plan.room_at(nbv.head<2>()), plan.start_room) << nbv.transpose();
+  if (c.nbv_in_start_room) {
+    EXPECT_EQ(plan.room_at(nbv.head<2>()), plan.start_room) << nbv.transpose();
+  }
 
   const auto found = read_openings((scratch() / name / "openings.json").string());
   const auto truths = sim_platform::openings_of_room(truth, plan, plan.start_room);
   const Eigen::Isometry3d world_to_map(Eigen::Translation3d(0.0, 0.0, uo.floor_z));
   const auto m = sim_platform::match_openings(found, truths, world_to_map);
+  // Precision against every opening of the scene: a window of an office seen through its
+  // door is a window, though not one of the room the map was made in.
+  const auto m_all = sim_platform::match_openings(found, truth.openings(), world_to_map);
   std::printf(
       "%s: %d candidates, nbv (%.2f, %.2f, %.2f), openings %zu found / %zu true, P %.2f R %.2f\n",
       name.c_str(), j["candidates"].get<int>(), nbv.x(), nbv.y(), nbv.z(), found.size(),
-      truths.size(), m.precision, m.recall);
+      truths.size(), m_all.precision, m.recall);
   for (std::size_t i = 0; i < found.size(); ++i)
     std::printf("  found %s %.2f x %.2f sill %.2f at (%.2f, %.2f) IoU %.2f\n",
                 to_string(found[i].kind), found[i].width, found[i].height, found[i].sill,
@@ -114,13 +125,16 @@ TEST_P(MapNbvOnUserMaps, FindsCandidatesAndTheOpenings) {
                 truths[i].kind == sim::OpeningKind::door ? "door" : "window", truths[i].width,
                 truths[i].height, truths[i].corners[0].x(), truths[i].corners[0].y(),
                 m.truth_iou[i]);
-  EXPECT_GE(m.precision, 0.9) << r.all();
+  EXPECT_GE(m_all.precision, 0.9) << r.all();
   EXPECT_GE(m.recall, 0.9) << r.all();
 }
 
 INSTANTIATE_TEST_SUITE_P(Maps, MapNbvOnUserMaps,
                          ::testing::Values(MapCase{"room-1", 0.08}, MapCase{"room-3", 0.08},
-                                           MapCase{"room-4", 0.1}, MapCase{"room-8", 0.08}),
+                                           MapCase{"room-4", 0.1}, MapCase{"room-8", 0.08},
+                                           // A 38 m corridor with 16 office doors, scanned
+                                           // every 5 m or so as a robot drives along it.
+                                           MapCase{"office-corridor.scene.json", 0.08, 8, false}),
                          [](const auto& info) {
                            std::string n =
                                info.param.scene.substr(0, info.param.scene.find('.')) + "_" +
