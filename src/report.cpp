@@ -42,6 +42,8 @@ std::string num(const json& j, const char* key, const char* format = "%.2f", dou
   if (!has_number(j, key)) return "—";
   char b[64];
   std::snprintf(b, sizeof b, format, scale * j[key].get<double>());
+  // "-0.0" (a tiny negative rounded away) reads as a sign that means something.
+  if (b[0] == '-' && std::string(b + 1).find_first_not_of("0.") == std::string::npos) return b + 1;
   return b;
 }
 
@@ -94,6 +96,7 @@ FileRole role_of(const fs::path& relative) {
             "CloudCompare (beside cloud.ply)"};
   if (name.rfind("report_", 0) == 0 && ext == ".svg")
     return {"a figure of this report", "any browser"};
+  if (name == "report.html") return {"the page of this output", "any browser"};
   if (name == "comparison.md") return {"Tables 1 and 2, Fig 15's counts", "any text editor"};
   if (name == "comparison.json")
     return {"the comparison with the homogeneous grid", "any browser or text editor"};
@@ -107,7 +110,7 @@ FileRole role_of(const fs::path& relative) {
   return {"", ""};
 }
 
-// Every file under `dir` (relative paths, sorted), but the report itself and temporaries.
+// Every file under `dir` (relative paths, sorted), but the page itself and temporaries.
 std::vector<fs::path> output_files(const fs::path& dir) {
   std::vector<fs::path> files;
   std::error_code ec;
@@ -115,7 +118,7 @@ std::vector<fs::path> output_files(const fs::path& dir) {
     if (!it->is_regular_file(ec)) continue;
     const fs::path rel = fs::relative(it->path(), dir, ec);
     const std::string name = rel.filename().string();
-    if (name == "report.html" || name.find(".tmp-") != std::string::npos) continue;
+    if (rel == "report.html" || name.find(".tmp-") != std::string::npos) continue;
     files.push_back(rel);
   }
   std::sort(files.begin(), files.end());
@@ -155,10 +158,13 @@ void write_charts(const json& survey, const fs::path& dir, std::vector<std::stri
   map.title = "The map after each scan: volume % per label";
   map.x_label = "scan";
   map.y_label = "% of the mapped volume";
-  for (Label l : {Label::kEmpty, Label::kOccupied, Label::kOccluded}) {
+  for (Label l : {Label::kEmpty, Label::kOccupied, Label::kOccluded, Label::kOut}) {
     ChartSeries s;
     s.name = std::string(label_name(l));
-    s.color = l == Label::kEmpty ? Rgb{70, 150, 230} : label_color(l);
+    // The label colours, a shade darker where they would fade on white.
+    s.color = l == Label::kEmpty ? Rgb{70, 150, 230}
+              : l == Label::kOut ? Rgb{210, 170, 0}
+                                 : label_color(l);
     for (const json& r : scans)
       if (r.contains("volume_percent") && has_number(r["volume_percent"], s.name.c_str())) {
         s.x.push_back(number_or(r, "index", 0));
@@ -252,7 +258,7 @@ void write_plan(const json& survey, const fs::path& dir, std::vector<std::string
     img.text(X(x0) - 6, Y(gy), std::to_string(int(gy)), 11, black, 1.0);
   }
   img.outline_rect(X(x0), Y(y1), X(x1), Y(y0), black);
-  img.text(left, 16, "Plan: scans, next best view, doors and windows (m, survey frame)", 14, black,
+  img.text(left, 16, "Plan: scans, next best view, doors and windows (m, survey frame)", 15, black,
            0.0, true);
   if (room) {
     const std::array<double, 2> dash{5, 4};
@@ -330,6 +336,32 @@ window.addEventListener('load', function () {
 </script>
 )";
 
+// Every file of the output with what it is and which program opens it.
+void files_section(std::ostream& h, const fs::path& dir) {
+  auto e = [](const std::string& s) { return html_escape(s); };
+  h << "<h2>Files</h2>\n<table id=\"files\">\n<thead><tr><th>file</th><th>size</th><th>what it "
+       "is</th><th>opens with</th></tr></thead>\n<tbody>\n";
+  for (const fs::path& f : output_files(dir)) {
+    const FileRole role = role_of(f);
+    std::error_code ec;
+    const std::uintmax_t bytes = fs::file_size(dir / f, ec);
+    h << "<tr><td><a href=\"" << e(f.generic_string()) << "\">" << e(f.generic_string())
+      << "</a></td><td class=\"n\">" << (ec ? "—" : size_text(bytes)) << "</td><td>" << e(role.what)
+      << "</td><td>" << e(role.opens_with) << "</td></tr>\n";
+  }
+  h << "</tbody>\n</table>\n"
+    << "<p><small>octovis and octomap-tools come with OctoMap (Debian: octovis, octomap-tools); "
+       "CloudCompare and MeshLab open point clouds.</small></p>\n";
+}
+
+// The page's head: its title and the style.
+void page_head(std::ostream& h, const std::string& title) {
+  h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+    << "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+    << "<title>" << html_escape(title) << "</title>\n<style>" << kStyle
+    << "</style>\n</head>\n<body>\n<h1>" << html_escape(title) << "</h1>\n";
+}
+
 std::string html_page(const json& survey, const fs::path& dir) {
   const json& scans = survey["scans"];
   std::ostringstream h;
@@ -337,10 +369,8 @@ std::string html_page(const json& survey, const fs::path& dir) {
   const std::string scene = survey.contains("scene") ? text_of(survey, "scene") : "";
   const std::string title = scene.empty() ? "Survey of " + std::to_string(scans.size()) + " scans"
                                           : "Survey of " + fs::path(scene).filename().string();
-  h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-    << "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
-    << "<title>" << e(title) << "</title>\n<style>" << kStyle << "</style>\n</head>\n<body>\n";
-  h << "<h1>" << e(title) << "</h1>\n<p><small>Written by semioctree " << e(version())
+  page_head(h, title);
+  h << "<p><small>Written by semioctree " << e(version())
     << " from <a href=\"survey.json\">survey.json</a>.</small></p>\n";
   if (survey.contains("error"))
     h << "<p class=\"warn\"><b>The survey stopped on an error:</b> " << e(text_of(survey, "error"))
@@ -368,9 +398,8 @@ std::string html_page(const json& survey, const fs::path& dir) {
                                : why == "registration_failed" ? "a scan failed to register"
                                                               : why;
   card(why_text,
-       "stopped because " + why +
-           (complete ? ": the stop percentage fell below the threshold"
-                     : ": occluded space remains"),
+       (complete ? "stop percentage below the threshold" : "occluded space remains") +
+           std::string(" (") + why + ")",
        complete ? "ok" : "warn");
   card(last ? num(*last, "stop_percent", "%.3f") + " %" : "—",
        "stop percentage (threshold " + num(survey, "stop_threshold_percent", "%g") + " %)");
@@ -393,7 +422,12 @@ std::string html_page(const json& survey, const fs::path& dir) {
     h << "<tr><th>" << e(k) << "</th><td>" << e(v) << "</td></tr>\n";
   };
   if (!scene.empty()) row("scene", scene);
-  if (survey.contains("inputs")) row("scan files", survey["inputs"].dump());
+  if (survey.contains("inputs") && survey["inputs"].is_array()) {
+    std::string files;
+    for (const json& f : survey["inputs"])
+      files += (files.empty() ? "" : ", ") + (f.is_string() ? f.get<std::string>() : f.dump());
+    row("scan files", files);
+  }
   if (survey.contains("policy")) row("next scan chosen by", text_of(survey, "policy"));
   row("NBV scoring method", text_of(survey, "method"));
   if (survey.contains("seed")) row("seed (scanner noise, odometry drift)", text_of(survey, "seed"));
@@ -552,22 +586,90 @@ std::string html_page(const json& survey, const fs::path& dir) {
     }
   }
 
-  // Every file.
-  h << "<h2>Files</h2>\n<table id=\"files\">\n<thead><tr><th>file</th><th>size</th><th>what it "
-       "is</th><th>opens with</th></tr></thead>\n<tbody>\n";
-  for (const fs::path& f : output_files(dir)) {
-    const FileRole role = role_of(f);
-    std::error_code ec;
-    const std::uintmax_t bytes = fs::file_size(dir / f, ec);
-    h << "<tr><td><a href=\"" << e(f.generic_string()) << "\">" << e(f.generic_string())
-      << "</a></td><td class=\"n\">" << (ec ? "—" : size_text(bytes)) << "</td><td>" << e(role.what)
-      << "</td><td>" << e(role.opens_with) << "</td></tr>\n";
-  }
-  h << "</tbody>\n</table>\n"
-    << "<p><small>octovis and octomap-tools come with OctoMap (Debian: octovis, octomap-tools); "
-       "CloudCompare and MeshLab open point clouds.</small></p>\n"
-    << kCheckScript << "</body>\n</html>\n";
+  files_section(h, dir);
+  h << kCheckScript << "</body>\n</html>\n";
   return h.str();
+}
+
+// The comparison's page: Tables 1 and 2, Fig 15 and the slices, from comparison.json.
+std::string comparison_page(const json& c, const fs::path& dir) {
+  std::ostringstream h;
+  auto e = [](const std::string& s) { return html_escape(s); };
+  page_head(h, "The semioctree against the homogeneous grid");
+  h << "<p><small>Written by semioctree " << e(version())
+    << " from <a href=\"comparison.json\">comparison.json</a> (the paper's Table 1, Table 2 and "
+       "Fig 15).</small></p>\n";
+  h << "<h2>Table 1. Volume % of each class</h2>\n<table id=\"table1\">\n<thead><tr>"
+       "<th>method</th><th>leaf (m)</th><th>coarse (m)</th>";
+  for (Label l : kVolumeLabels)
+    h << "<th><span class=\"swatch\" style=\"background:" << color_css(label_color(l))
+      << "\"></span>" << e(std::string(label_name(l))) << "</th>";
+  h << "</tr></thead>\n<tbody>\n";
+  const json table1 = c.value("table1", json::array());
+  for (const json& r : table1) {
+    h << "<tr><td>" << e(text_of(r, "method")) << "</td><td class=\"n\">" << num(r, "leaf", "%g")
+      << "</td><td class=\"n\">" << num(r, "coarse", "%g") << "</td>";
+    for (Label l : kVolumeLabels)
+      h << "<td class=\"n\">"
+        << (r.contains("volume_percent")
+                ? num(r["volume_percent"], std::string(label_name(l)).c_str(), "%.2f")
+                : "—")
+        << "</td>";
+    h << "</tr>\n";
+  }
+  h << "</tbody>\n</table>\n";
+  h << "<h2>Table 2. Increment factor of the octant count per halving of the leaf</h2>\n"
+       "<table id=\"table2\">\n<thead><tr><th>method</th><th>factors</th><th>average</th></tr>"
+       "</thead>\n<tbody>\n";
+  const json table2 = c.value("table2", json::object());
+  for (const auto& [method, t] : table2.items()) {
+    std::string factors;
+    for (const json& f : t.value("factors", json::array()))
+      if (f.is_number()) {
+        char b[32];
+        std::snprintf(b, sizeof b, "%.3f", f.get<double>());
+        factors += (factors.empty() ? "" : ", ") + std::string(b);
+      }
+    h << "<tr><td>" << e(method) << "</td><td class=\"n\">" << factors << "</td><td class=\"n\">"
+      << num(t, "average", "%.3f") << "</td></tr>\n";
+  }
+  h << "</tbody>\n</table>\n<h2>Figures</h2>\n<div class=\"figs\">\n";
+  // Fig 15, then the slices of each leaf size, coarsest first, the two methods side by side
+  // (named as `compare` writes them: slice_<method>_<leaf>.png).
+  std::vector<std::string> figures = {"fig15_octants.svg"};
+  std::vector<std::pair<double, std::string>> slices;
+  for (const json& r : table1)
+    if (has_number(r, "leaf") && r.contains("method") && r["method"].is_string()) {
+      char name[96];
+      std::snprintf(name, sizeof name, "slice_%s_%g.png", r["method"].get<std::string>().c_str(),
+                    r["leaf"].get<double>());
+      slices.emplace_back(-r["leaf"].get<double>(), name);
+    }
+  std::stable_sort(slices.begin(), slices.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& s : slices) figures.push_back(s.second);
+  for (const std::string& name : figures)
+    if (fs::exists(dir / name))
+      h << "<figure><a href=\"" << e(name) << "\"><img src=\"" << e(name) << "\" alt=\"" << e(name)
+        << "\"></a><figcaption><small>" << e(name) << "</small></figcaption></figure>\n";
+  h << "</div>\n";
+  files_section(h, dir);
+  h << kCheckScript << "</body>\n</html>\n";
+  return h.str();
+}
+
+json read_record(const fs::path& source, const std::string& format) {
+  std::ifstream in(source);
+  if (!in) throw FileError(source.string() + ": cannot open it");
+  json j;
+  try {
+    j = json::parse(in);
+  } catch (const json::exception& ex) {
+    throw FileError(source.string() + ": not JSON: " + ex.what());
+  }
+  if (!j.is_object() || j.value("format", "") != format)
+    throw FileError(source.string() + ": not a " + format + " record");
+  return j;
 }
 
 }  // namespace
@@ -603,17 +705,9 @@ std::vector<std::string> survey_report_files() {
 
 void write_survey_report(const std::string& dir) {
   const fs::path d(dir), source = d / "survey.json";
-  std::ifstream in(source);
-  if (!in) throw FileError(source.string() + ": cannot open the survey's record");
-  json survey;
-  try {
-    survey = json::parse(in);
-  } catch (const json::exception& ex) {
-    throw FileError(source.string() + ": not JSON: " + ex.what());
-  }
-  if (!survey.is_object() || survey.value("format", "") != "semioctree-survey" ||
-      !survey.contains("scans") || !survey["scans"].is_array())
-    throw FileError(source.string() + ": not a survey record (format semioctree-survey)");
+  const json survey = read_record(source, "semioctree-survey");
+  if (!survey.contains("scans") || !survey["scans"].is_array())
+    throw FileError(source.string() + ": not a semioctree-survey record (no scans)");
   // Figures of an earlier report that this survey has no data for must not linger.
   for (const std::string& f : survey_report_files()) {
     std::error_code ec;
@@ -621,6 +715,17 @@ void write_survey_report(const std::string& dir) {
   }
   try {
     const std::string page = html_page(survey, d);
+    write_file_atomically((d / "report.html").string(), [&](std::ostream& out) { out << page; });
+  } catch (const json::exception& ex) {
+    throw FileError(source.string() + ": a value of unexpected type: " + ex.what());
+  }
+}
+
+void write_comparison_report(const std::string& dir) {
+  const fs::path d(dir), source = d / "comparison.json";
+  const json comparison = read_record(source, "semioctree-comparison");
+  try {
+    const std::string page = comparison_page(comparison, d);
     write_file_atomically((d / "report.html").string(), [&](std::ostream& out) { out << page; });
   } catch (const json::exception& ex) {
     throw FileError(source.string() + ": a value of unexpected type: " + ex.what());

@@ -76,7 +76,8 @@ void write_slice_png(const SemiOcTree& tree, const std::string& path, const Slic
   img.outline_rect(ox - 1, oy - 1, ox + map_w + 1, oy + map_h + 1, kBlack);
 
   // Scans (black discs, numbered as scan_NN) joined in their order, and the NBV (red).
-  const double rad = std::max(5.0, ppl * 2.0);
+  // Discs of a size that reads at any scale (a leaf may be 1 or 30 pixels).
+  const double rad = std::clamp(ppl * 2.0, 5.0, 9.0);
   for (std::size_t i = 0; i + 1 < opt.scans.size(); ++i)
     img.line(px(opt.scans[i].x), py(opt.scans[i].y), px(opt.scans[i + 1].x), py(opt.scans[i + 1].y),
              kBlack, 1.5);

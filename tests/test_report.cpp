@@ -159,7 +159,7 @@ TEST(Report, BadSurveyRecordIsAFileErrorNamingIt) {
   std::ofstream(dir / "survey.json") << "{ not json";
   EXPECT_NE(message().find("survey.json: not JSON"), std::string::npos) << message();
   std::ofstream(dir / "survey.json") << R"({"format": "semioctree-stats"})";
-  EXPECT_NE(message().find("not a survey record"), std::string::npos) << message();
+  EXPECT_NE(message().find("not a semioctree-survey record"), std::string::npos) << message();
   json s = sample_survey(1);
   s["scans"][0] = "north";  // a scan that is not a record
   write_json(dir / "survey.json", s);
@@ -212,6 +212,61 @@ std::string attribute(const std::string& element, const std::string& name) {
   return std::regex_search(element, m, re) ? m[1].str() : "";
 }
 
+// What Chromium made of a page: the page's own check (written on `load`) and its
+// console messages (--enable-logging=stderr writes them as lines with ":CONSOLE").
+struct BrowserView {
+  std::string check;  // <div id="report-check" ...>, empty when the script did not run
+  std::vector<std::string> console;
+};
+
+// Headless Chromium as root needs --no-sandbox; it gets a profile of its own.
+std::string chromium_command(const std::string& chromium) {
+  return "timeout 120 '" + chromium +
+         "' --headless --no-sandbox --disable-gpu --hide-scrollbars --no-first-run "
+         "--user-data-dir='" +
+         (scratch() / "chromium-profile").string() + "' ";
+}
+
+BrowserView open_in_chromium(const std::string& chromium, const fs::path& page) {
+  const fs::path dom = scratch() / "dom.html", log = scratch() / "chromium.log";
+  const int status = std::system(
+      (chromium_command(chromium) + "--enable-logging=stderr --v=0 --dump-dom 'file://" +
+       page.string() + "' >'" + dom.string() + "' 2>'" + log.string() + "'")
+          .c_str());
+  EXPECT_EQ(status, 0) << slurp(log.string());
+  BrowserView view;
+  const std::string dumped = slurp(dom.string());
+  std::smatch m;
+  if (std::regex_search(dumped, m, std::regex("<div id=\"report-check\"[^>]*>")))
+    view.check = m[0].str();
+  std::istringstream lines(slurp(log.string()));
+  for (std::string line; std::getline(lines, line);)
+    if (line.find(":CONSOLE") != std::string::npos) view.console.push_back(line);
+  return view;
+}
+
+// Copies `dir` elsewhere, removes it, and opens the copy's report.html: every image
+// loaded, no console message. Returns the check (for the rows) and the copy.
+std::pair<std::string, fs::path> check_copied_report(const std::string& chromium,
+                                                     const fs::path& dir, std::size_t min_images) {
+  const fs::path copy = scratch() / ("copied " + dir.filename().string());
+  fs::copy(dir, copy, fs::copy_options::recursive);
+  fs::remove_all(dir);
+  const std::string page = slurp((copy / "report.html").string());
+  // Offline: nothing from the network, no absolute path.
+  EXPECT_EQ(page.find("http://"), std::string::npos);
+  EXPECT_EQ(page.find("https://"), std::string::npos);
+  EXPECT_EQ(page.find(dir.string()), std::string::npos);
+  const std::size_t images = count_of(page, "<img ");
+  EXPECT_GE(images, min_images);
+  const BrowserView view = open_in_chromium(chromium, copy / "report.html");
+  EXPECT_FALSE(view.check.empty()) << "the page's check did not run";
+  EXPECT_EQ(attribute(view.check, "data-images"), std::to_string(images)) << view.check;
+  EXPECT_EQ(attribute(view.check, "data-images-loaded"), std::to_string(images)) << view.check;
+  for (const std::string& line : view.console) ADD_FAILURE() << "console message: " << line;
+  return {view.check, copy};
+}
+
 TEST(ReportInBrowser, TheSurveysPageRendersFromACopiedFolder) {
   const std::string chromium = find_chromium();
   if (chromium.empty())
@@ -225,46 +280,16 @@ TEST(ReportInBrowser, TheSurveysPageRendersFromACopiedFolder) {
   const json survey = json::parse(slurp((out / "survey.json").string()));
   const std::size_t scans = survey["scans"].size();
   ASSERT_GE(scans, 1u);
-  // Self-contained: the page is opened from a copy, the original folder gone.
-  const fs::path copy = scratch() / "copied report";
-  fs::copy(out, copy, fs::copy_options::recursive);
-  fs::remove_all(out);
-  const std::string page = slurp((copy / "report.html").string());
-  const std::size_t images = count_of(page, "<img ");
-  EXPECT_GE(images, scans + 3) << "a slice per scan and the charts";
-
-  // Headless Chromium as root needs --no-sandbox; a profile of its own; its console
-  // messages go to stderr (--enable-logging=stderr) as lines with ":CONSOLE".
-  const std::string url = "'file://" + (copy / "report.html").string() + "'";
-  const std::string common = "timeout 120 '" + chromium +
-                             "' --headless --no-sandbox --disable-gpu --hide-scrollbars "
-                             "--no-first-run --user-data-dir='" +
-                             (scratch() / "chromium-profile").string() + "' ";
-  const fs::path dom = scratch() / "dom.html", log = scratch() / "chromium.log";
-  const int dumped = std::system((common + "--enable-logging=stderr --v=0 --dump-dom " + url +
-                                  " >'" + dom.string() + "' 2>'" + log.string() + "'")
-                                     .c_str());
-  ASSERT_EQ(dumped, 0) << slurp(log.string());
-  // The page's own check, written on `load`: every image loaded, a row per scan.
-  const std::string dumped_dom = slurp(dom.string());
-  std::smatch m;
-  ASSERT_TRUE(std::regex_search(dumped_dom, m, std::regex("<div id=\"report-check\"[^>]*>")))
-      << "the page's check did not run:\n"
-      << dumped_dom.substr(0, 2000);
-  const std::string check = m[0].str();
-  EXPECT_EQ(attribute(check, "data-images"), std::to_string(images)) << check;
-  EXPECT_EQ(attribute(check, "data-images-loaded"), std::to_string(images)) << check;
+  // A slice per scan and the four figures, from a copy of the folder.
+  const auto [check, copy] = check_copied_report(chromium, out, scans + 4);
   EXPECT_EQ(attribute(check, "data-scan-rows"), std::to_string(scans)) << check;
-  std::istringstream lines(slurp(log.string()));
-  for (std::string line; std::getline(lines, line);)
-    EXPECT_EQ(line.find(":CONSOLE"), std::string::npos) << "console message: " << line;
 
   // A screenshot of the top of the page: text, tables and figures, not a blank page.
-  const fs::path shot = scratch() / "report.png";
-  const int shot_status =
-      std::system((common + "--window-size=1280,2400 --screenshot='" + shot.string() + "' " + url +
-                   " >/dev/null 2>'" + log.string() + "'")
-                      .c_str());
+  const fs::path shot = scratch() / "report.png", log = scratch() / "chromium.log";
+  const int shot_status = std::system(
+      (chromium_command(chromium) + "--window-size=1280,2400 --screenshot='" + shot.string() +
+       "' 'file://" + (copy / "report.html").string() + "' >/dev/null 2>'" + log.string() + "'")
+          .c_str());
   ASSERT_EQ(shot_status, 0) << slurp(log.string());
   const PngPixels img = read_png_pixels(shot);
   ASSERT_EQ(img.width, 1280u);
@@ -276,6 +301,22 @@ TEST(ReportInBrowser, TheSurveysPageRendersFromACopiedFolder) {
   EXPECT_GT(double(not_white) / double(img.rgb.size()), 0.05);
   // The label colours of the slices are on screen (the slices were drawn, not broken icons).
   EXPECT_EQ(colours.count(0x96c8ffu), 1u) << "empty (150, 200, 255) of a slice";
+}
+
+TEST(ReportInBrowser, TheComparisonsPageRendersFromACopiedFolder) {
+  const std::string chromium = find_chromium();
+  if (chromium.empty())
+    GTEST_SKIP() << "no Chromium found (chromium, chromium-browser or google-chrome on PATH, or "
+                    "$SEMIOCTREE_CHROMIUM): Debian: apt-get install chromium";
+  const fs::path out = scratch() / "compare";
+  const auto r = run_cli("compare --scene " + std::string(SEMIOCTREE_SOURCE_DIR) +
+                         "/sim/scenes/box-room.scene.json --leaves 0.4,0.2 --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.all();
+  const std::string page = slurp((out / "report.html").string());
+  EXPECT_EQ(count_of(page, "<td>semioctree</td>"), 2u + 1u) << "Table 1's two rows, Table 2's";
+  EXPECT_EQ(count_of(page, "<td>homogeneous</td>"), 2u + 1u);
+  // Fig 15 and a slice per run.
+  check_copied_report(chromium, out, 1 + 4);
 }
 
 }  // namespace

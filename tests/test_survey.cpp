@@ -382,6 +382,11 @@ TEST(Nbv, PlacesScansByTheirFileViewpointAndReportsTheNextView) {
   EXPECT_GT(j["scans"][1]["stop_percent"].get<double>(), 0.0);
   for (const char* f : {"semioctree.ot", "labels_color.ot", "occupancy.bt", "slice.png"})
     EXPECT_TRUE(fs::exists(out / "scan_01" / f)) << f;
+  // The report too, with a row per scan and the scan files it was given.
+  const std::string page = testing::slurp((out / "report.html").string());
+  for (const char* row : {"<tr id=\"scan_00\">", "<tr id=\"scan_01\">"})
+    EXPECT_NE(page.find(row), std::string::npos) << row;
+  EXPECT_NE(page.find("scan files"), std::string::npos);
 }
 
 TEST(Nbv, FailedRegistrationStillWritesTheSurveyOfTheScansBefore) {
@@ -400,6 +405,9 @@ TEST(Nbv, FailedRegistrationStillWritesTheSurveyOfTheScansBefore) {
   EXPECT_FALSE(j["complete"].get<bool>());
   EXPECT_EQ(j["scans"].size(), 1u);
   EXPECT_NE(j["error"].get<std::string>().find("could not be registered"), std::string::npos);
+  // The report says so at the top.
+  const std::string page = testing::slurp((out / "report.html").string());
+  EXPECT_NE(page.find("The survey stopped on an error"), std::string::npos);
 }
 
 TEST(Nbv, PlacesScansWithoutPoseByGlobalAlignment) {

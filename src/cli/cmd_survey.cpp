@@ -1,6 +1,7 @@
 // `semioctree survey --scene FILE --out DIR ...`: the autonomous survey of a
 // scene with the simulated robot and scanner: options → the survey stage (with the
-// simulated platform and the chosen policy) → survey.json, scan_NN/ and the coverage.
+// simulated platform and the chosen policy) → survey.json, report.html, scan_NN/ and the
+// coverage.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -304,8 +305,9 @@ void add_survey_command(CLI::App& app) {
       "preprocess, register (odometry + ICP), update the semioctree (occupancy, doors and "
       "windows, occlusion), choose the next best view, drive there; until the stop percentage "
       "is below --stop, no feasible candidate remains, or --max-scans scans are taken. Writes "
-      "survey.json and scan_NN/ (semioctree.ot, labels_color.ot, occupancy.bt, slice.png, "
-      "cloud.ply) per scan, and coverage_missed.ply (the reference surface it missed).");
+      "survey.json, report.html (the survey on one page for any browser) and scan_NN/ "
+      "(semioctree.ot, labels_color.ot, occupancy.bt, slice.png, cloud.ply) per scan, and "
+      "coverage_missed.ply (the reference surface it missed).");
   cmd->add_option("--scene", o->scene, "scene file (.scene.json, mesh or .bt)")
       ->required()
       ->check(CLI::ExistingFile);
