@@ -22,6 +22,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 constexpr const char* kProgressChart = "report_progress.svg";
+constexpr const char* kCoverageChart = "report_coverage.svg";
 constexpr const char* kMapChart = "report_map.svg";
 constexpr const char* kLevelsChart = "report_levels.svg";
 constexpr const char* kPlan = "report_plan.svg";
@@ -154,6 +155,21 @@ void write_charts(const json& survey, const fs::path& dir, std::vector<std::stri
     write_line_chart(c, (dir / kProgressChart).string());
     written.push_back(kProgressChart);
   }
+  ChartSeries covered{"surface covered", {0, 130, 60}, {}, {}, ChartSeries::Values::kBelow};
+  for (const json& s : scans)
+    if (has_number(s, "coverage_percent") && has_number(s, "index")) {
+      covered.x.push_back(s["index"].get<double>());
+      covered.y.push_back(s["coverage_percent"].get<double>());
+    }
+  if (!covered.x.empty()) {
+    LineChart c;
+    c.title = "Surface coverage after each scan";
+    c.x_label = "scan";
+    c.y_label = "% of the reference surface";
+    c.series = {covered};
+    write_line_chart(c, (dir / kCoverageChart).string());
+    written.push_back(kCoverageChart);
+  }
   LineChart map;
   map.title = "The map after each scan: volume % per label";
   map.x_label = "scan";
@@ -212,25 +228,26 @@ void write_plan(const json& survey, const fs::path& dir, std::vector<std::string
   std::vector<P> scans, all;
   for (const json& s : survey["scans"])
     if (s.contains("pose") && has_number(s["pose"], "x"))
-      scans.push_back({s["pose"]["x"].get<double>(), s["pose"]["y"].get<double>()});
+      scans.push_back({s.at("pose").at("x").get<double>(), s.at("pose").at("y").get<double>()});
   if (scans.empty()) return;
   all = scans;
   const json& last = survey["scans"].back();
   std::optional<P> nbv;
   if (last.contains("nbv") && has_number(last["nbv"], "x"))
-    nbv = P{last["nbv"]["x"].get<double>(), last["nbv"]["y"].get<double>()};
+    nbv = P{last.at("nbv").at("x").get<double>(), last.at("nbv").at("y").get<double>()};
   if (nbv) all.push_back(*nbv);
   std::optional<std::array<P, 2>> room;
   if (last.contains("room") && last["room"].is_object()) {
     const json& r = last["room"];
-    room = std::array<P, 2>{P{r["min"][0].get<double>(), r["min"][1].get<double>()},
-                            P{r["max"][0].get<double>(), r["max"][1].get<double>()}};
+    room = std::array<P, 2>{P{r.at("min").at(0).get<double>(), r.at("min").at(1).get<double>()},
+                            P{r.at("max").at(0).get<double>(), r.at("max").at(1).get<double>()}};
     all.push_back((*room)[0]);
     all.push_back((*room)[1]);
   }
   const json openings = survey.value("openings", json::array());
   for (const json& o : openings)
-    for (const json& c : o["corners"]) all.push_back({c[0].get<double>(), c[1].get<double>()});
+    for (const json& c : o.at("corners"))
+      all.push_back({c.at(0).get<double>(), c.at(1).get<double>()});
   double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
   for (const P& p : all) {
     x0 = std::min(x0, p.x);
@@ -272,13 +289,14 @@ void write_plan(const json& survey, const fs::path& dir, std::vector<std::string
   for (const json& o : openings) {
     const bool door = o.value("kind", "") == "door";
     const Rgb c = label_color(door ? Label::kDoor : Label::kWindow);
-    const json& a = o["corners"][0];
-    const json& b = o["corners"][1];
-    img.line(X(a[0].get<double>()), Y(a[1].get<double>()), X(b[0].get<double>()),
-             Y(b[1].get<double>()), c, 6);
+    const json& a = o.at("corners").at(0);
+    const json& b = o.at("corners").at(1);
+    img.line(X(a.at(0).get<double>()), Y(a.at(1).get<double>()), X(b.at(0).get<double>()),
+             Y(b.at(1).get<double>()), c, 6);
     const std::string name = door ? "D" + std::to_string(++doors) : "W" + std::to_string(++windows);
-    img.text((X(a[0].get<double>()) + X(b[0].get<double>())) / 2 + 6,
-             (Y(a[1].get<double>()) + Y(b[1].get<double>())) / 2 - 10, name, 12, c, 0.0, true);
+    img.text((X(a.at(0).get<double>()) + X(b.at(0).get<double>())) / 2 + 6,
+             (Y(a.at(1).get<double>()) + Y(b.at(1).get<double>())) / 2 - 10, name, 12, c, 0.0,
+             true);
   }
   for (std::size_t i = 0; i + 1 < scans.size(); ++i)
     img.line(X(scans[i].x), Y(scans[i].y), X(scans[i + 1].x), Y(scans[i + 1].y), black, 1.5);
@@ -303,8 +321,8 @@ const char* kStyle = R"(
 body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,"DejaVu Sans",sans-serif;margin:0 auto;
  max-width:1400px;padding:16px 24px;color:#222;background:#fff}
 h1{font-size:1.6em;margin:.2em 0}h2{font-size:1.25em;margin-top:1.6em;border-bottom:1px solid #ccc}
-table{border-collapse:collapse;margin:.5em 0;font-size:.9em}
-th,td{border:1px solid #ccc;padding:4px 8px;vertical-align:top;text-align:left}
+table{border-collapse:collapse;margin:.5em 0;font-size:.85em}
+th,td{border:1px solid #ccc;padding:3px 6px;vertical-align:top;text-align:left}
 th{background:#f0f3f7}td.n{text-align:right;font-variant-numeric:tabular-nums;white-space:nowrap}
 .cards{display:flex;flex-wrap:wrap;gap:10px;margin:.5em 0}
 .card{border:1px solid #ccc;border-radius:6px;padding:8px 14px;min-width:130px;background:#fafbfc}
@@ -312,7 +330,7 @@ th{background:#f0f3f7}td.n{text-align:right;font-variant-numeric:tabular-nums;wh
 .ok{color:#070}.warn{color:#b00}
 .figs{display:grid;grid-template-columns:repeat(auto-fill,minmax(560px,1fr));gap:12px}
 .figs img{border:1px solid #ddd;width:100%;height:auto}
-img.slice{width:260px;border:1px solid #ddd}img.plan{max-width:100%;width:960px;border:1px solid #ddd}
+img.slice{width:200px;border:1px solid #ddd}img.plan{max-width:100%;width:960px;border:1px solid #ddd}
 .wide{overflow-x:auto}
 .swatch{display:inline-block;width:.9em;height:.9em;border:1px solid #555;vertical-align:middle;margin-right:4px}
 small{color:#555}
@@ -463,7 +481,8 @@ std::string html_page(const json& survey, const fs::path& dir) {
     << "<div class=\"wide\"><table id=\"scans\">\n<thead><tr><th>scan</th><th>slice at scanner "
        "height</th>"
        "<th>position x, y (m), yaw</th><th>points</th><th>octants</th><th>volume %</th>"
-       "<th>stop %</th><th>next best view</th><th>time (s)</th></tr></thead>\n<tbody>\n";
+       "<th>stop %</th><th>surface covered %</th><th>next best view</th><th>time (s)</th></tr>"
+       "</thead>\n<tbody>\n";
   for (const json& s : scans) {
     const std::size_t index = s.value("index", std::size_t(0));
     const std::string folder = scan_folder(index);
@@ -494,7 +513,8 @@ std::string html_page(const json& survey, const fs::path& dir) {
           << "\"></span>" << e(name) << " " << e(num(s["volume_percent"], name.c_str(), "%.2f"))
           << "<br>";
       }
-    h << "</td><td class=\"n\">" << e(num(s, "stop_percent", "%.3f")) << "</td><td class=\"n\">";
+    h << "</td><td class=\"n\">" << e(num(s, "stop_percent", "%.3f")) << "</td><td class=\"n\">"
+      << e(num(s, "coverage_percent", "%.2f")) << "</td><td class=\"n\">";
     if (s.contains("nbv") && s["nbv"].is_object())
       h << "(" << e(num(s["nbv"], "x")) << ", " << e(num(s["nbv"], "y")) << ")<br>score "
         << e(num(s["nbv"], "score", "%.1f")) << "<br><small>" << e(num(s, "candidates", "%.0f"))
@@ -542,14 +562,15 @@ std::string html_page(const json& survey, const fs::path& dir) {
       const bool door = kind == "door";
       const std::string name =
           door ? "D" + std::to_string(++doors) : "W" + std::to_string(++windows);
-      const json& c = o["corners"];
+      const json c = o.value("corners", json());
       char from[64] = "—", to[64] = "—", bottom[32] = "—";
       if (c.is_array() && c.size() == 4) {
-        std::snprintf(from, sizeof from, "%.2f, %.2f", c[0][0].get<double>(),
-                      c[0][1].get<double>());
-        std::snprintf(to, sizeof to, "%.2f, %.2f", c[1][0].get<double>(), c[1][1].get<double>());
+        std::snprintf(from, sizeof from, "%.2f, %.2f", c.at(0).at(0).get<double>(),
+                      c.at(0).at(1).get<double>());
+        std::snprintf(to, sizeof to, "%.2f, %.2f", c.at(1).at(0).get<double>(),
+                      c.at(1).at(1).get<double>());
         std::snprintf(bottom, sizeof bottom, "%.2f",
-                      std::min(c[0][2].get<double>(), c[1][2].get<double>()));
+                      std::min(c.at(0).at(2).get<double>(), c.at(1).at(2).get<double>()));
       }
       h << "<tr><td>" << name << "</td><td><span class=\"swatch\" style=\"background:"
         << color_css(label_color(door ? Label::kDoor : Label::kWindow)) << "\"></span>" << e(kind)
@@ -700,7 +721,7 @@ std::string html_escape(const std::string& text) {
 }
 
 std::vector<std::string> survey_report_files() {
-  return {"report.html", kProgressChart, kMapChart, kLevelsChart, kPlan};
+  return {"report.html", kProgressChart, kCoverageChart, kMapChart, kLevelsChart, kPlan};
 }
 
 void write_survey_report(const std::string& dir) {

@@ -54,6 +54,7 @@ json sample_survey(std::size_t scans) {
            {"window", 0.0},
            {"out", double(i)}}},
          {"stop_percent", 2.0 / double(1 + 10 * i)},
+         {"coverage_percent", 80.0 + double(i)},
          {"nbv", {{"x", 3.0}, {"y", 1.0}, {"z", 1.5}, {"score", 10.0}}},
          {"candidates", 12},
          {"room", {{"min", {0, 0, 0}}, {"max", {5, 4, 2.8}}}},
@@ -161,11 +162,42 @@ TEST(Report, BadSurveyRecordIsAFileErrorNamingIt) {
   std::ofstream(dir / "survey.json") << R"({"format": "semioctree-stats"})";
   EXPECT_NE(message().find("not a semioctree-survey record"), std::string::npos) << message();
   json s = sample_survey(1);
+  s["openings"][0]["corners"] = json::array({{5, 1}});  // a corner short of z, one corner
+  write_json(dir / "survey.json", s);
+  EXPECT_NE(message().find("survey.json: a value of unexpected type"), std::string::npos)
+      << message();
+  s = sample_survey(1);
   s["scans"][0] = "north";  // a scan that is not a record
   write_json(dir / "survey.json", s);
   EXPECT_NE(message().find("survey.json: a value of unexpected type"), std::string::npos)
       << message();
   EXPECT_FALSE(fs::exists(dir / "report.html"));
+}
+
+TEST(Report, TheReportCommandRewritesEitherPageAndNamesWhatIsMissing) {
+  const fs::path dir = scratch() / "command";
+  fs::create_directories(dir);
+  auto r = run_cli("report " + dir.string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find((dir / "survey.json").string() + ": cannot open it"), std::string::npos)
+      << r.all();
+  write_json(dir / "survey.json", sample_survey(2));
+  r = run_cli("report " + dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.all();
+  EXPECT_EQ(count_of(slurp((dir / "report.html").string()), "<tr id=\"scan_"), 2u);
+  // A comparison's folder (no survey.json): the comparison's page.
+  const fs::path cmp = scratch() / "command-compare";
+  fs::create_directories(cmp);
+  write_json(cmp / "comparison.json",
+             {{"format", "semioctree-comparison"},
+              {"version", 1},
+              {"table1", {{{"method", "semioctree"}, {"leaf", 0.1}, {"coarse", 0.8}}}},
+              {"table2", {{"semioctree", {{"factors", {4.0}}, {"average", 4.0}}}}}});
+  r = run_cli("report " + cmp.string());
+  ASSERT_EQ(r.exit_code, 0) << r.all();
+  const std::string page = slurp((cmp / "report.html").string());
+  EXPECT_NE(page.find("Table 1"), std::string::npos);
+  EXPECT_EQ(count_of(page, "<td>semioctree</td>"), 2u);
 }
 
 // --- in a browser ---------------------------------------------------------------------
@@ -280,8 +312,8 @@ TEST(ReportInBrowser, TheSurveysPageRendersFromACopiedFolder) {
   const json survey = json::parse(slurp((out / "survey.json").string()));
   const std::size_t scans = survey["scans"].size();
   ASSERT_GE(scans, 1u);
-  // A slice per scan and the four figures, from a copy of the folder.
-  const auto [check, copy] = check_copied_report(chromium, out, scans + 4);
+  // A slice per scan and the five figures, from a copy of the folder.
+  const auto [check, copy] = check_copied_report(chromium, out, scans + 5);
   EXPECT_EQ(attribute(check, "data-scan-rows"), std::to_string(scans)) << check;
 
   // A screenshot of the top of the page: text, tables and figures, not a blank page.

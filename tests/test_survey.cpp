@@ -308,6 +308,14 @@ TEST(Survey, WritesEveryOutputWithTheDocumentedSchema) {
   }
   EXPECT_GT(j["coverage"]["reference_points"].get<double>(), 1000);
   EXPECT_GT(j["coverage"]["percent"].get<double>(), 50.0);
+  // The coverage after each scan grows, and the last is the survey's.
+  double covered_before = 0;
+  for (const json& s : j["scans"]) {
+    const double covered = s["coverage_percent"].get<double>();
+    EXPECT_GE(covered, covered_before);
+    covered_before = covered;
+  }
+  EXPECT_DOUBLE_EQ(covered_before, j["coverage"]["percent"].get<double>());
   // Every reference sample is covered, or missed in view of a scan, or hidden from all.
   const json& missed = j["coverage"]["missed"];
   EXPECT_EQ(j["coverage"]["covered"].get<std::size_t>() + missed["in_view"].get<std::size_t>() +

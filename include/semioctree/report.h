@@ -9,8 +9,8 @@
 
 namespace semioctree {
 
-// Writes DIR/report.html and its figures (report_progress.svg, report_map.svg,
-// report_levels.svg, report_plan.svg) from DIR/survey.json, linking every file found
+// Writes DIR/report.html and its figures (report_progress.svg, report_coverage.svg,
+// report_map.svg, report_levels.svg, report_plan.svg) from DIR/survey.json, linking every file found
 // in DIR and its subfolders with what it is and which program opens it. Each file is
 // written atomically. Throws FileError naming the file: survey.json missing, not JSON
 // or not a survey.

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -71,12 +72,16 @@ struct SurveyOptions {
 constexpr std::size_t kMissedPartsListed = 8;
 
 // Prints what the simulation knows beside the survey's own output (true poses, pose
-// errors, moves) and adds it to the scans' records.
+// errors, moves, and the surface covered so far when `coverage_reference` is given) and
+// adds it to the scans' records.
 class SimulatedSurveyOutput : public SurveyOutput {
  public:
   SimulatedSurveyOutput(std::string dir, const SurveyParams& params,
-                        const SimulatedPlatform& platform)
-      : SurveyOutput(std::move(dir), params), platform_(platform) {}
+                        const SimulatedPlatform& platform,
+                        std::function<const sim::CoverageReference&()> coverage_reference)
+      : SurveyOutput(std::move(dir), params),
+        platform_(platform),
+        coverage_reference_(std::move(coverage_reference)) {}
 
   void scan_taken(std::size_t index, const IncomingScan&) override {
     const ScanTruth& t = platform_.truths().at(index);
@@ -99,6 +104,24 @@ class SimulatedSurveyOutput : public SurveyOutput {
     if (scan.index > 0)
       std::printf("  pose error after registration: %.1f mm, %.3f°\n", 1000 * t.pose_error_m,
                   t.pose_error_deg);
+    if (coverage_reference_) {
+      // A sample is covered when any point lies near it: the flags of this scan's new points
+      // join those of the scans before.
+      const auto t0 = Clock::now();
+      const std::vector<Eigen::Vector3f>& all = platform_.measured_points();
+      const std::vector<Eigen::Vector3f> added(all.begin() + std::ptrdiff_t(points_counted_),
+                                               all.end());
+      points_counted_ = all.size();
+      const std::vector<bool> now = sim::covered_samples(coverage_reference_(), added);
+      covered_.resize(now.size(), false);
+      for (std::size_t i = 0; i < now.size(); ++i)
+        if (now[i]) covered_[i] = true;
+      const sim::Coverage c = sim::count_covered(covered_);
+      rec["coverage_percent"] = c.percent;
+      std::printf("  coverage so far: %.2f %% of the reference surface [%.2f s]\n", c.percent,
+                  seconds_since(t0));
+    }
+    std::fflush(stdout);
   }
 
   void moved(const ScanRecord& scan, const NextScanChoice& choice,
@@ -116,6 +139,9 @@ class SimulatedSurveyOutput : public SurveyOutput {
 
  private:
   const SimulatedPlatform& platform_;
+  std::function<const sim::CoverageReference&()> coverage_reference_;  // empty: no coverage
+  std::vector<bool> covered_;       // reference samples covered by the scans so far
+  std::size_t points_counted_ = 0;  // of platform_.measured_points(), in covered_
 };
 
 // survey.json's "coverage" of the scene's surfaces by the survey's registered points,
@@ -236,7 +262,9 @@ void run_survey(const SurveyOptions& o) {
     return *reference;
   };
   SimulatedPlatform platform(scene, o.seed, o.plan.threads, !o.skip_coverage);
-  SimulatedSurveyOutput output(o.out, p, platform);
+  SimulatedSurveyOutput output(
+      o.out, p, platform,
+      o.skip_coverage ? std::function<const sim::CoverageReference&()>() : coverage_reference);
   Survey survey(p, &output);
   std::unique_ptr<NextScanPolicy> policy;
   if (o.policy == "random") {
