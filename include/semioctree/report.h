@@ -10,10 +10,9 @@
 namespace semioctree {
 
 // Writes DIR/report.html and its figures (report_progress.svg, report_coverage.svg,
-// report_map.svg, report_levels.svg, report_plan.svg) from DIR/survey.json, linking every file found
-// in DIR and its subfolders with what it is and which program opens it. Each file is
-// written atomically. Throws FileError naming the file: survey.json missing, not JSON
-// or not a survey.
+// report_map.svg, report_levels.svg, report_plan.svg) from DIR/survey.json, linking every file
+// found in DIR and its subfolders with what it is and which program opens it. Each file is written
+// atomically. Throws FileError naming the file: survey.json missing, not JSON or not a survey.
 void write_survey_report(const std::string& dir);
 
 // Writes DIR/report.html of `compare` from DIR/comparison.json: Tables 1 and 2, Fig 15
