@@ -11,6 +11,8 @@ namespace semioctree {
 
 namespace {
 
+constexpr double kPi = 3.14159265358979323846;
+
 cairo_status_t append_to_string(void* closure, const unsigned char* data, unsigned int length) {
   static_cast<std::string*>(closure)->append(reinterpret_cast<const char*>(data), length);
   return CAIRO_STATUS_SUCCESS;
@@ -80,7 +82,7 @@ void Canvas::line(double x0, double y0, double x1, double y1, Rgb c, double widt
 
 void Canvas::disc(double x, double y, double radius, Rgb fill, Rgb outline) {
   cairo_new_sub_path(cr_);
-  cairo_arc(cr_, x, y, radius, 0, 2 * 3.14159265358979323846);
+  cairo_arc(cr_, x, y, radius, 0, 2 * kPi);
   set_color(fill);
   cairo_fill_preserve(cr_);
   set_color(outline);
@@ -111,6 +113,27 @@ double Canvas::text_width(const std::string& s, double size, bool bold) {
   cairo_text_extents_t e;
   cairo_text_extents(cr_, s.c_str(), &e);
   return e.x_advance;
+}
+
+void Canvas::vertical_text(double x, double y, const std::string& s, double size, Rgb c) {
+  cairo_save(cr_);
+  cairo_translate(cr_, x, y);
+  cairo_rotate(cr_, -kPi / 2);
+  text(0, 0, s, size, c, 0.5);
+  cairo_restore(cr_);
+}
+
+void Canvas::boxed_text(double x, double y, const std::string& s, double size, Rgb c) {
+  const double w = text_width(s, size, true);
+  cairo_rectangle(cr_, x - 2, y - 0.7 * size, w + 4, 1.4 * size);
+  set_color({255, 255, 255}, 0.85);
+  cairo_fill(cr_);
+  text(x, y, s, size, c, 0.0, true);
+}
+
+void Canvas::set_dashed(bool dashed) {
+  const double pattern[2] = {6, 4};
+  cairo_set_dash(cr_, dashed ? pattern : nullptr, dashed ? 2 : 0, 0);
 }
 
 void Canvas::write(const std::string& path) {

@@ -39,6 +39,12 @@ class Canvas {
   void text(double x, double y, const std::string& s, double size, Rgb c, double anchor = 0.0,
             bool bold = false);
   double text_width(const std::string& s, double size, bool bold = false);
+  // Text reading upwards, centred on (x, y) (a y axis's name).
+  void vertical_text(double x, double y, const std::string& s, double size, Rgb c);
+  // Bold text on a translucent white box, left end at x (labels over a map).
+  void boxed_text(double x, double y, const std::string& s, double size, Rgb c);
+  // Lines and outlines drawn from now on dashed (6 on, 4 off) or solid.
+  void set_dashed(bool dashed);
 
   // Writes the canvas to `path` (atomically; throws FileError). Once only.
   void write(const std::string& path);

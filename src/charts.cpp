@@ -1,7 +1,6 @@
 #include "semioctree/charts.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -130,17 +129,12 @@ void write_line_chart(const LineChart& chart, const std::string& path) {
   img.line(left, H - bottom, W - right, H - bottom, kBlack);
   img.text(left, 18, chart.title, 15, kBlack, 0.0, true);
   img.text((left + W - right) / 2, H - 14, chart.x_label, 12, kBlack, 0.5);
-  cairo_save(img.cr());
-  cairo_translate(img.cr(), 16, (top + H - bottom) / 2);
-  cairo_rotate(img.cr(), -3.14159265358979323846 / 2);
-  img.text(0, 0, chart.y_label, 12, kBlack, 0.5);
-  cairo_restore(img.cr());
+  img.vertical_text(16, (top + H - bottom) / 2, chart.y_label, 12, kBlack);
 
   if (chart.reference_y) {
-    const std::array<double, 2> dash{6, 4};
-    cairo_set_dash(img.cr(), dash.data(), 2, 0);
+    img.set_dashed(true);
     img.line(left, Y(*chart.reference_y), W - right, Y(*chart.reference_y), {200, 0, 0}, 1.2);
-    cairo_set_dash(img.cr(), nullptr, 0, 0);
+    img.set_dashed(false);
     img.text(left + 6, Y(*chart.reference_y) - 9, chart.reference_name, 11, {200, 0, 0});
   }
   // The legend: one row under the title.
@@ -152,7 +146,6 @@ void write_line_chart(const LineChart& chart, const std::string& path) {
     legend_x += 30 + img.text_width(s.name, 12) + 24;
   }
   for (const ChartSeries& s : chart.series) {
-    cairo_set_line_join(img.cr(), CAIRO_LINE_JOIN_ROUND);
     for (std::size_t i = 0; i + 1 < s.x.size(); ++i)
       img.line(X(s.x[i]), Y(s.y[i]), X(s.x[i + 1]), Y(s.y[i + 1]), s.color, 2.5);
     for (std::size_t i = 0; i < s.x.size(); ++i) {

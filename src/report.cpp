@@ -278,11 +278,10 @@ void write_plan(const json& survey, const fs::path& dir, std::vector<std::string
   img.text(left, 16, "Plan: scans, next best view, doors and windows (m, survey frame)", 15, black,
            0.0, true);
   if (room) {
-    const std::array<double, 2> dash{5, 4};
-    cairo_set_dash(img.cr(), dash.data(), 2, 0);
+    img.set_dashed(true);
     img.outline_rect(X((*room)[0].x), Y((*room)[1].y), X((*room)[1].x), Y((*room)[0].y),
                      {120, 120, 120}, 1.2);
-    cairo_set_dash(img.cr(), nullptr, 0, 0);
+    img.set_dashed(false);
     img.text(X((*room)[0].x) + 4, Y((*room)[1].y) + 10, "room (NBV targets)", 11, {120, 120, 120});
   }
   int doors = 0, windows = 0;
@@ -301,11 +300,10 @@ void write_plan(const json& survey, const fs::path& dir, std::vector<std::string
   for (std::size_t i = 0; i + 1 < scans.size(); ++i)
     img.line(X(scans[i].x), Y(scans[i].y), X(scans[i + 1].x), Y(scans[i + 1].y), black, 1.5);
   if (nbv) {
-    const std::array<double, 2> dash{6, 4};
-    cairo_set_dash(img.cr(), dash.data(), 2, 0);
+    img.set_dashed(true);
     img.line(X(scans.back().x), Y(scans.back().y), X(nbv->x), Y(nbv->y), label_color(Label::kNbv),
              1.5);
-    cairo_set_dash(img.cr(), nullptr, 0, 0);
+    img.set_dashed(false);
     img.disc(X(nbv->x), Y(nbv->y), 7, label_color(Label::kNbv), {255, 255, 255});
     img.text(X(nbv->x) + 10, Y(nbv->y) - 10, "NBV", 12, label_color(Label::kNbv), 0.0, true);
   }

@@ -1,7 +1,6 @@
 #include "semioctree/slice_image.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -82,10 +81,10 @@ void write_slice_png(const SemiOcTree& tree, const std::string& path, const Slic
     img.line(px(opt.scans[i].x), py(opt.scans[i].y), px(opt.scans[i + 1].x), py(opt.scans[i + 1].y),
              kBlack, 1.5);
   if (opt.nbv && !opt.scans.empty()) {
-    cairo_set_dash(img.cr(), std::array<double, 2>{6, 4}.data(), 2, 0);
+    img.set_dashed(true);
     img.line(px(opt.scans.back().x), py(opt.scans.back().y), px(opt.nbv->x), py(opt.nbv->y),
              label_color(Label::kNbv), 1.5);
-    cairo_set_dash(img.cr(), nullptr, 0, 0);
+    img.set_dashed(false);
   }
   int doors = 0, windows = 0;
   for (const SliceOpening& o : opt.openings) {
@@ -95,19 +94,10 @@ void write_slice_png(const SemiOcTree& tree, const std::string& path, const Slic
     img.line(x0, y0, x1, y1, c, std::max(7.0, ppl * 1.6));
     const std::string name =
         o.door ? "D" + std::to_string(++doors) : "W" + std::to_string(++windows);
-    const double w = img.text_width(name, 13, true), cx = (x0 + x1) / 2 + 10,
-                 cy = (y0 + y1) / 2 - 12;
-    cairo_rectangle(img.cr(), cx - 2, cy - 9, w + 4, 18);
-    img.set_color(kWhite, 0.85);
-    cairo_fill(img.cr());
-    img.text(cx, cy, name, 13, darker(c, 0.8), 0.0, true);
+    img.boxed_text((x0 + x1) / 2 + 10, (y0 + y1) / 2 - 12, name, 13, darker(c, 0.8));
   }
   auto tag = [&](const Point3& p, const std::string& text, Rgb c) {
-    const double x = px(p.x) + rad + 3, y = py(p.y) - rad - 2, w = img.text_width(text, 13, true);
-    cairo_rectangle(img.cr(), x - 2, y - 9, w + 4, 18);
-    img.set_color(kWhite, 0.85);
-    cairo_fill(img.cr());
-    img.text(x, y, text, 13, c, 0.0, true);
+    img.boxed_text(px(p.x) + rad + 3, py(p.y) - rad - 2, text, 13, c);
   };
   for (const Point3& s : opt.scans)
     img.disc(px(s.x), py(s.y), rad, label_color(Label::kScan), kWhite);
@@ -131,11 +121,7 @@ void write_slice_png(const SemiOcTree& tree, const std::string& path, const Slic
     img.text(ox - 9, py(y), metres(y), 12, kBlack, 1.0);
   }
   img.text(ox + map_w / 2.0, oy + map_h + 34, "x (m, map frame)", 12, kBlack, 0.5);
-  cairo_save(img.cr());
-  cairo_translate(img.cr(), 12, oy + map_h / 2.0);
-  cairo_rotate(img.cr(), -3.14159265358979323846 / 2);
-  img.text(0, 0, "y (m)", 12, kBlack, 0.5);
-  cairo_restore(img.cr());
+  img.vertical_text(12, oy + map_h / 2.0, "y (m)", 12, kBlack);
 
   // Title.
   char buf[240];
