@@ -8,7 +8,7 @@ cd "$(dirname "$0")"
 
 PACKAGES=(build-essential cmake ninja-build pkg-config
   liboctomap-dev libdynamicedt3d-dev libeigen3-dev libpcl-dev libembree-dev
-  libgtest-dev libbenchmark-dev nlohmann-json3-dev libcli11-dev libpng-dev libstb-dev octomap-tools)
+  libgtest-dev libbenchmark-dev nlohmann-json3-dev libcli11-dev libpng-dev libcairo2-dev octomap-tools)
 BUILD_DIR=${SEMIOCTREE_BUILD_DIR:-build}
 
 install_dependencies() {
@@ -48,8 +48,10 @@ main_job() {
   "$cli" survey --scene "$scene" --out survey_out
   "$cli" info survey_out/scan_00/semioctree.ot
   "$cli" compare --scene "$scene" --target-points 400000 --out survey_out/compare
-  echo "== done: survey_out/survey.json, survey_out/scan_NN/ (maps, slice.png, cloud.ply),"
-  echo "   survey_out/compare (comparison.md, fig15_octants.png)"
+  "$cli" report survey_out # rewritten: its list of files now holds compare/ too
+  echo "== done: open survey_out/report.html in a browser (the survey on one page);"
+  echo "   survey_out/survey.json, survey_out/scan_NN/ (maps, slice.png, cloud.ply),"
+  echo "   survey_out/compare (report.html, comparison.md, fig15_octants.svg)"
 }
 
 run_tests() {

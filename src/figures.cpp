@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "raster.h"
+#include "semioctree/charts.h"
 #include "semioctree/octomap_ext/file_io.h"
 
 namespace semioctree {
@@ -66,72 +66,41 @@ std::string fmt(const char* f, double v) {
   return b;
 }
 
-// Fig 15: octants against resolution, both methods, log-scale counts.
-void write_chart(const std::map<std::string, std::vector<const DiscretizationRun*>>& by_method,
+// Fig 15: octants against resolution, both methods, log-scale counts; the curves rise to
+// the right, so the homogeneous grid's (upper) counts go above-left of its points and the
+// semioctree's below-right, clear of the lines.
+void write_fig15(const std::map<std::string, std::vector<DiscretizationRun>>& by_method,
                  const std::string& path) {
-  const int W = 980, H = 600, left = 110, right = 130, top = 60, bottom = 80;
-  Raster img(W, H);
-  double lo = 1e300, hi = 0;
+  LineChart chart;
+  chart.title = "Fig 15: octants needed for a resolution (log scale)";
+  chart.x_label = "leaf size (resolution)";
+  chart.y_label = "octants";
+  chart.log_y = true;
+  chart.width = 980;
+  chart.height = 600;
   std::vector<double> leaves;
   for (const auto& [m, runs] : by_method)
-    for (const auto* r : runs) {
-      lo = std::min(lo, double(r->stats.total()));
-      hi = std::max(hi, double(r->stats.total()));
-      if (std::find(leaves.begin(), leaves.end(), r->leaf) == leaves.end())
-        leaves.push_back(r->leaf);
-    }
+    for (const auto& r : runs)
+      if (std::find(leaves.begin(), leaves.end(), r.leaf) == leaves.end()) leaves.push_back(r.leaf);
   std::sort(leaves.rbegin(), leaves.rend());
-  const double ylo = std::floor(std::log10(std::max(lo, 1.0))),
-               yhi = std::ceil(std::log10(std::max(hi, 10.0)));
-  auto X = [&](double leaf) {
-    const auto i = std::find(leaves.begin(), leaves.end(), leaf) - leaves.begin();
-    return left + int((W - left - right) *
-                      (leaves.size() > 1 ? double(i) / double(leaves.size() - 1) : 0.5));
-  };
-  auto Y = [&](double count) {
-    return top +
-           int((H - top - bottom) * (1.0 - (std::log10(std::max(count, 1.0)) - ylo) / (yhi - ylo)));
-  };
-  img.line(left, top, left, H - bottom, {0, 0, 0});
-  img.line(left, H - bottom, W - right, H - bottom, {0, 0, 0});
-  for (double e = ylo; e <= yhi; e += 1) {
-    const int y = Y(std::pow(10.0, e));
-    img.line(left - 6, y, W - right, y, {210, 210, 210});
-    img.text(left - 12 - Raster::text_width("1e" + std::to_string(int(e))), y - 6,
-             "1e" + std::to_string(int(e)), {0, 0, 0});
+  for (std::size_t i = 0; i < leaves.size(); ++i) {
+    chart.x_ticks.push_back(double(i));
+    chart.x_tick_labels.push_back(fmt("%g m", leaves[i]));
   }
-  for (double leaf : leaves) {
-    const std::string t = fmt("%g m", leaf);
-    img.line(X(leaf), H - bottom, X(leaf), H - bottom + 6, {0, 0, 0});
-    img.text(X(leaf) - Raster::text_width(t) / 2, H - bottom + 12, t, {0, 0, 0});
-  }
-  img.text(left, 18, "Fig 15: octants needed for a resolution (log scale)", {0, 0, 0});
-  img.text(W / 2 - 80, H - 36, "leaf size (resolution)", {0, 0, 0});
-  img.text(8, top - 24, "octants", {0, 0, 0});  // the y axis
   const std::map<std::string, Rgb> colors = {{"homogeneous", {200, 60, 0}},
                                              {"semioctree", {0, 80, 200}}};
-  int ly = top + 10;
   for (const auto& [m, runs] : by_method) {
-    const Rgb c = colors.count(m) ? colors.at(m) : Rgb{0, 0, 0};
-    for (std::size_t i = 0; i + 1 < runs.size(); ++i)
-      img.line(X(runs[i]->leaf), Y(double(runs[i]->stats.total())), X(runs[i + 1]->leaf),
-               Y(double(runs[i + 1]->stats.total())), c, 3);
-    for (const auto* r : runs) {
-      const int x = X(r->leaf), y = Y(double(r->stats.total()));
-      img.fill_rect(x - 5, y - 5, x + 6, y + 6, c);
-      // The curves rise to the right: the upper curve's labels go above-left
-      // of its points, the lower one's below-right, both clear of the lines.
-      const std::string n = std::to_string(r->stats.total());
-      if (m == "semioctree")
-        img.text(x + 10, y + 8, n, c);
-      else
-        img.text(x - 10 - Raster::text_width(n), y - 22, n, c);
+    ChartSeries s;
+    s.name = m;
+    s.color = colors.count(m) ? colors.at(m) : Rgb{0, 0, 0};
+    s.values = m == "semioctree" ? ChartSeries::Values::kBelow : ChartSeries::Values::kAbove;
+    for (const auto& r : runs) {
+      s.x.push_back(double(std::find(leaves.begin(), leaves.end(), r.leaf) - leaves.begin()));
+      s.y.push_back(double(r.stats.total()));
     }
-    img.fill_rect(left + 30, ly, left + 50, ly + 14, c);
-    img.text(left + 60, ly, m, {0, 0, 0});
-    ly += 24;
+    chart.series.push_back(s);
   }
-  img.write_png(path);
+  write_line_chart(chart, path);
 }
 
 }  // namespace
@@ -268,10 +237,9 @@ void write_comparison(const std::vector<DiscretizationRun>& runs, const std::str
   j["runs"] = all;
   write_text((std::filesystem::path(dir) / "comparison.json").string(), j.dump(2) + "\n");
   write_text((std::filesystem::path(dir) / "comparison.md").string(), md.str());
-  std::map<std::string, std::vector<const DiscretizationRun*>> ptrs;
-  for (const auto& [m, v] : by_method)
-    for (const auto& r : v) ptrs[m].push_back(&r);
-  write_chart(ptrs, (std::filesystem::path(dir) / "fig15_octants.png").string());
+  // SVG for browsers and the report, PNG for image viewers and documents.
+  for (const char* name : {"fig15_octants.svg", "fig15_octants.png"})
+    write_fig15(by_method, (std::filesystem::path(dir) / name).string());
 }
 
 }  // namespace semioctree

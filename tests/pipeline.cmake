@@ -7,6 +7,7 @@ foreach(t test_preprocess test_scan_io test_discretize test_occlusion test_updat
   endif()
 endforeach()
 if(TARGET test_discretize)
+  find_package(PNG REQUIRED)  # reads the slices back, pixel by pixel
   target_link_libraries(test_discretize PRIVATE PNG::PNG)
 endif()
 
@@ -26,6 +27,14 @@ if(TARGET semioctree_sim)
   semioctree_add_test(test_survey SOURCES test_survey.cpp LIBS nlohmann_json::nlohmann_json)
   target_include_directories(test_survey PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
   add_dependencies(test_survey semioctree_cli)
+endif()
+# The survey report: the page from a survey.json, and a survey's page in headless Chromium.
+if(TARGET semioctree_sim)
+  find_package(PNG REQUIRED)  # reads Chromium's screenshot back
+  semioctree_add_test(test_report SOURCES test_report.cpp
+                      LIBS semioctree nlohmann_json::nlohmann_json PNG::PNG)
+  target_include_directories(test_report PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+  add_dependencies(test_report semioctree_cli)
 endif()
 if(TARGET test_figures)
   target_link_libraries(test_figures PRIVATE nlohmann_json::nlohmann_json)

@@ -334,8 +334,9 @@ TEST(Cli, CompareWritesTablesAndChart) {
   const CliRun r = run_cli("compare --cloud " + (dir / "room.pcd").string() +
                            " --leaves 0.4,0.2,0.1 --out " + (dir / "cmp").string());
   ASSERT_EQ(r.exit_code, 0) << r.all();
-  for (const char* f : {"comparison.json", "comparison.md", "fig15_octants.png",
-                        "slice_semioctree_0.1.png", "slice_homogeneous_0.1.png"})
+  for (const char* f :
+       {"comparison.json", "comparison.md", "fig15_octants.png", "fig15_octants.svg",
+        "slice_semioctree_0.1.png", "slice_homogeneous_0.1.png"})
     EXPECT_TRUE(fs::exists(dir / "cmp" / f)) << f;
   // The images decode: PNG signature and a non-empty IHDR.
   for (const char* f : {"fig15_octants.png", "slice_semioctree_0.1.png"}) {
@@ -350,6 +351,14 @@ TEST(Cli, CompareWritesTablesAndChart) {
     EXPECT_GT(be32(16), 100u) << f;  // width
     EXPECT_GT(be32(20), 100u) << f;  // height
   }
+  // Fig 15 also as SVG: a complete document with the two curves, axes and text drawn.
+  const std::string svg = testing::slurp((dir / "cmp" / "fig15_octants.svg").string());
+  EXPECT_NE(svg.find("<svg"), std::string::npos);
+  EXPECT_NE(svg.find("</svg>"), std::string::npos);
+  std::size_t paths = 0;
+  for (std::size_t p = svg.find("<path"); p != std::string::npos; p = svg.find("<path", p + 1))
+    ++paths;
+  EXPECT_GT(paths, 20u);
   std::ifstream js(dir / "cmp" / "comparison.json");
   const auto j = nlohmann::json::parse(js);
   // Homogeneous over the same region at every resolution: each halving is ×8.

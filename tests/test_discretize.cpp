@@ -124,6 +124,9 @@ TEST(SliceImage, ShowsEachLabelInItsColourAndTheScanner) {
   o.height = 0.125;  // through the door leaf, the occluded octants and the wall
   o.pixels_per_leaf = 10;
   o.scans = {Point3(0.6, 0.6, 0.125)};
+  o.nbv = Point3(1.0, 0.6, 0.125);
+  // A window above the cut is marked all the same: a bar across its wall.
+  o.openings = {{false, Point3(0.2, 0.75, 1.0), Point3(0.6, 0.75, 1.0)}};
   write_slice_png(t, (dir / "s.png").string(), o);
   const auto img = read_png((dir / "s.png").string());
   ASSERT_FALSE(img.empty());
@@ -140,7 +143,10 @@ TEST(SliceImage, ShowsEachLabelInItsColourAndTheScanner) {
   EXPECT_TRUE(same(door, label_color(Label::kDoor)))
       << int(door.r) << "," << int(door.g) << "," << int(door.b);
   EXPECT_TRUE(same(at(0.9, 0.5), label_color(Label::kEmpty)));
-  EXPECT_TRUE(same(at(0.6, 0.6), label_color(Label::kScan)));  // scanner disc
+  EXPECT_TRUE(same(at(0.6, 0.6), label_color(Label::kScan)));      // scanner disc
+  EXPECT_TRUE(same(at(1.0, 0.6), label_color(Label::kNbv)));       // NBV disc
+  EXPECT_TRUE(same(at(0.4, 0.75), label_color(Label::kWindow)));   // the window's bar
+  EXPECT_FALSE(same(at(0.4, 0.65), label_color(Label::kWindow)));  // and only there
   EXPECT_THROW(write_slice_png(SemiOcTree(0.05, 0.4), (dir / "e.png").string(), o),
                std::invalid_argument);
 }

@@ -308,6 +308,14 @@ TEST(Survey, WritesEveryOutputWithTheDocumentedSchema) {
   }
   EXPECT_GT(j["coverage"]["reference_points"].get<double>(), 1000);
   EXPECT_GT(j["coverage"]["percent"].get<double>(), 50.0);
+  // The coverage after each scan grows, and the last is the survey's.
+  double covered_before = 0;
+  for (const json& s : j["scans"]) {
+    const double covered = s["coverage_percent"].get<double>();
+    EXPECT_GE(covered, covered_before);
+    covered_before = covered;
+  }
+  EXPECT_DOUBLE_EQ(covered_before, j["coverage"]["percent"].get<double>());
   // Every reference sample is covered, or missed in view of a scan, or hidden from all.
   const json& missed = j["coverage"]["missed"];
   EXPECT_EQ(j["coverage"]["covered"].get<std::size_t>() + missed["in_view"].get<std::size_t>() +
@@ -382,6 +390,11 @@ TEST(Nbv, PlacesScansByTheirFileViewpointAndReportsTheNextView) {
   EXPECT_GT(j["scans"][1]["stop_percent"].get<double>(), 0.0);
   for (const char* f : {"semioctree.ot", "labels_color.ot", "occupancy.bt", "slice.png"})
     EXPECT_TRUE(fs::exists(out / "scan_01" / f)) << f;
+  // The report too, with a row per scan and the scan files it was given.
+  const std::string page = testing::slurp((out / "report.html").string());
+  for (const char* row : {"<tr id=\"scan_00\">", "<tr id=\"scan_01\">"})
+    EXPECT_NE(page.find(row), std::string::npos) << row;
+  EXPECT_NE(page.find("scan files"), std::string::npos);
 }
 
 TEST(Nbv, FailedRegistrationStillWritesTheSurveyOfTheScansBefore) {
@@ -400,6 +413,9 @@ TEST(Nbv, FailedRegistrationStillWritesTheSurveyOfTheScansBefore) {
   EXPECT_FALSE(j["complete"].get<bool>());
   EXPECT_EQ(j["scans"].size(), 1u);
   EXPECT_NE(j["error"].get<std::string>().find("could not be registered"), std::string::npos);
+  // The report says so at the top.
+  const std::string page = testing::slurp((out / "report.html").string());
+  EXPECT_NE(page.find("The survey stopped on an error"), std::string::npos);
 }
 
 TEST(Nbv, PlacesScansWithoutPoseByGlobalAlignment) {

@@ -2,7 +2,7 @@
 // level and label, volume % per label — Table 1 —, memory), and the comparison
 // of the semioctree against the homogeneous grid over resolutions: octant
 // counts (Fig 15), increment factor per halving (Table 2), as JSON, Markdown
-// and a PNG chart.
+// and a chart (SVG and PNG).
 #pragma once
 
 #include <string>
@@ -30,7 +30,7 @@ double volume_percent(const OctantStatistics& s, Label l);
 // stats.json of one run (written atomically).
 void write_run_json(const DiscretizationRun& run, const std::string& path);
 
-// comparison.json, comparison.md and fig15_octants.png in `dir`. `runs` holds
+// comparison.json, comparison.md and fig15_octants.svg / .png in `dir`. `runs` holds
 // both methods at each resolution.
 void write_comparison(const std::vector<DiscretizationRun>& runs, const std::string& dir);
 

@@ -14,6 +14,7 @@
 #include "semioctree/occlusion.h"
 #include "semioctree/openings.h"
 #include "semioctree/outputs.h"
+#include "semioctree/report.h"
 #include "semioctree/timing.h"
 
 namespace semioctree::cli {
@@ -33,7 +34,8 @@ void add_compare_command(CLI::App& app) {
       "doors, windows, occlusion study) with the semioctree "
       "and with the homogeneous grid at several resolutions; write the paper's Table 1, Table 2 "
       "and Fig 15 (comparison.json, "
-      "comparison.md, fig15_octants.png) and a slice image per run.");
+      "comparison.md, fig15_octants.svg and .png) and a slice image per run, and report.html "
+      "showing them in any browser.");
   add_scan_source_options(*cmd, o->source,
                           "scanner pose X,Y,Z[,YAW_DEG] of each --cloud (default: the pose its "
                           "file carries, else the origin)");
@@ -47,10 +49,10 @@ void add_compare_command(CLI::App& app) {
   add_scanner_limit_options(*cmd, o->limits);
   cmd->add_option("--out", o->out, "output directory")->required();
   cmd->callback([o] {
-    check_outputs_spare_inputs(
-        source_paths(o->source), {},
-        {{{"--out", o->out},
-          {"comparison.json", "comparison.md", "fig15_octants.png", "slice_*.png"}}});
+    check_outputs_spare_inputs(source_paths(o->source), {},
+                               {{{"--out", o->out},
+                                 {"comparison.json", "comparison.md", "fig15_octants.svg",
+                                  "fig15_octants.png", "slice_*.png", "report.html"}}});
     const PreparedCloud cloud = prepare(o->source, "compare", &o->limits);
     std::vector<DiscretizationRun> runs;
     for (const char* method : {"semioctree", "homogeneous"}) {
@@ -86,8 +88,11 @@ void add_compare_command(CLI::App& app) {
       }
     }
     write_comparison(runs, o->out);
-    std::printf("wrote %s/{comparison.json, comparison.md, fig15_octants.png, slice_*.png}\n",
-                o->out.c_str());
+    write_comparison_report(o->out);
+    std::printf(
+        "wrote %s/{comparison.json, comparison.md, fig15_octants.svg, fig15_octants.png, "
+        "slice_*.png, report.html}\n",
+        o->out.c_str());
   });
 }
 

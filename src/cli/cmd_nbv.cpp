@@ -164,7 +164,8 @@ void add_nbv_command(CLI::App& app) {
       "(occupancy, doors and windows, occlusion), score the candidate positions and report the "
       "next best view and the stop percentage. Returns outside the scanner's limits (--min-range, "
       "--elevation-min: on a robot, the lowest elevation that clears its body) are dropped: they "
-      "are the scanner's mount and the robot. Writes survey.json and scan_NN/ as `survey` does.");
+      "are the scanner's mount and the robot. Writes survey.json, report.html and scan_NN/ as "
+      "`survey` does.");
   cmd->add_option("--cloud", o->clouds,
                   "scan file: .pcd, .ply, .xyz/.txt or .ptx (repeat for several scans)")
       ->required()

@@ -1,10 +1,12 @@
 // `semioctree survey --scene FILE --out DIR ...`: the autonomous survey of a
 // scene with the simulated robot and scanner: options → the survey stage (with the
-// simulated platform and the chosen policy) → survey.json, scan_NN/ and the coverage.
+// simulated platform and the chosen policy) → survey.json, report.html, scan_NN/ and the
+// coverage.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -70,12 +72,16 @@ struct SurveyOptions {
 constexpr std::size_t kMissedPartsListed = 8;
 
 // Prints what the simulation knows beside the survey's own output (true poses, pose
-// errors, moves) and adds it to the scans' records.
+// errors, moves, and the surface covered so far when `coverage_reference` is given) and
+// adds it to the scans' records.
 class SimulatedSurveyOutput : public SurveyOutput {
  public:
   SimulatedSurveyOutput(std::string dir, const SurveyParams& params,
-                        const SimulatedPlatform& platform)
-      : SurveyOutput(std::move(dir), params), platform_(platform) {}
+                        const SimulatedPlatform& platform,
+                        std::function<const sim::CoverageReference&()> coverage_reference)
+      : SurveyOutput(std::move(dir), params),
+        platform_(platform),
+        coverage_reference_(std::move(coverage_reference)) {}
 
   void scan_taken(std::size_t index, const IncomingScan&) override {
     const ScanTruth& t = platform_.truths().at(index);
@@ -98,6 +104,24 @@ class SimulatedSurveyOutput : public SurveyOutput {
     if (scan.index > 0)
       std::printf("  pose error after registration: %.1f mm, %.3f°\n", 1000 * t.pose_error_m,
                   t.pose_error_deg);
+    if (coverage_reference_) {
+      // A sample is covered when any point lies near it: the flags of this scan's new points
+      // join those of the scans before.
+      const auto t0 = Clock::now();
+      const std::vector<Eigen::Vector3f>& all = platform_.measured_points();
+      const std::vector<Eigen::Vector3f> added(all.begin() + std::ptrdiff_t(points_counted_),
+                                               all.end());
+      points_counted_ = all.size();
+      const std::vector<bool> now = sim::covered_samples(coverage_reference_(), added);
+      covered_.resize(now.size(), false);
+      for (std::size_t i = 0; i < now.size(); ++i)
+        if (now[i]) covered_[i] = true;
+      const sim::Coverage c = sim::count_covered(covered_);
+      rec["coverage_percent"] = c.percent;
+      std::printf("  coverage so far: %.2f %% of the reference surface [%.2f s]\n", c.percent,
+                  seconds_since(t0));
+    }
+    std::fflush(stdout);
   }
 
   void moved(const ScanRecord& scan, const NextScanChoice& choice,
@@ -115,6 +139,9 @@ class SimulatedSurveyOutput : public SurveyOutput {
 
  private:
   const SimulatedPlatform& platform_;
+  std::function<const sim::CoverageReference&()> coverage_reference_;  // empty: no coverage
+  std::vector<bool> covered_;       // reference samples covered by the scans so far
+  std::size_t points_counted_ = 0;  // of platform_.measured_points(), in covered_
 };
 
 // survey.json's "coverage" of the scene's surfaces by the survey's registered points,
@@ -235,7 +262,9 @@ void run_survey(const SurveyOptions& o) {
     return *reference;
   };
   SimulatedPlatform platform(scene, o.seed, o.plan.threads, !o.skip_coverage);
-  SimulatedSurveyOutput output(o.out, p, platform);
+  SimulatedSurveyOutput output(
+      o.out, p, platform,
+      o.skip_coverage ? std::function<const sim::CoverageReference&()>() : coverage_reference);
   Survey survey(p, &output);
   std::unique_ptr<NextScanPolicy> policy;
   if (o.policy == "random") {
@@ -304,8 +333,9 @@ void add_survey_command(CLI::App& app) {
       "preprocess, register (odometry + ICP), update the semioctree (occupancy, doors and "
       "windows, occlusion), choose the next best view, drive there; until the stop percentage "
       "is below --stop, no feasible candidate remains, or --max-scans scans are taken. Writes "
-      "survey.json and scan_NN/ (semioctree.ot, labels_color.ot, occupancy.bt, slice.png, "
-      "cloud.ply) per scan, and coverage_missed.ply (the reference surface it missed).");
+      "survey.json, report.html (the survey on one page for any browser) and scan_NN/ "
+      "(semioctree.ot, labels_color.ot, occupancy.bt, slice.png, cloud.ply) per scan, and "
+      "coverage_missed.ply (the reference surface it missed).");
   cmd->add_option("--scene", o->scene, "scene file (.scene.json, mesh or .bt)")
       ->required()
       ->check(CLI::ExistingFile);

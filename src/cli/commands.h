@@ -15,6 +15,7 @@ void add_compare_command(CLI::App& app);
 void add_classify_command(CLI::App& app);
 void add_nbv_command(CLI::App& app);
 void add_map_nbv_command(CLI::App& app);
+void add_report_command(CLI::App& app);
 #ifdef SEMIOCTREE_HAVE_SIM
 void add_scan_command(CLI::App& app);
 void add_scene_info_command(CLI::App& app);

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   semioctree::cli::add_classify_command(app);
   semioctree::cli::add_nbv_command(app);
   semioctree::cli::add_map_nbv_command(app);
+  semioctree::cli::add_report_command(app);
 #ifdef SEMIOCTREE_HAVE_SIM
   semioctree::cli::add_scan_command(app);
   semioctree::cli::add_scene_info_command(app);

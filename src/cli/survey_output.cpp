@@ -1,5 +1,6 @@
 #include "survey_output.h"
 
+#include <algorithm>
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -10,6 +11,7 @@
 #include "semioctree/figures.h"
 #include "semioctree/octomap_ext/file_io.h"
 #include "semioctree/outputs.h"
+#include "semioctree/report.h"
 #include "semioctree/timing.h"
 
 namespace semioctree::cli {
@@ -44,7 +46,9 @@ void print_floor_layer_note(const RobotGeometry& robot, double leaf) {
 }
 
 std::vector<std::string> survey_files_written() {
-  return {"survey.json", "coverage_missed.ply", "scan_[0-9][0-9]/"};
+  std::vector<std::string> files = {"survey.json", "coverage_missed.ply", "scan_[0-9][0-9]/"};
+  for (const std::string& f : survey_report_files()) files.push_back(f);
+  return files;
 }
 
 void clear_previous_survey(const std::string& dir) {
@@ -60,7 +64,9 @@ void clear_previous_survey(const std::string& dir) {
     const bool scan_dir = name.size() == 7 && name.compare(0, 5, "scan_") == 0 &&
                           std::isdigit(static_cast<unsigned char>(name[5])) &&
                           std::isdigit(static_cast<unsigned char>(name[6])) && e.is_directory(ec);
-    if (scan_dir || name == "survey.json" || name == "coverage_missed.ply") {
+    const std::vector<std::string> report = survey_report_files();
+    const bool report_file = std::find(report.begin(), report.end(), name) != report.end();
+    if (scan_dir || report_file || name == "survey.json" || name == "coverage_missed.ply") {
       fs::remove_all(e.path(), ec);
       if (ec)
         throw std::runtime_error(e.path().string() +
@@ -164,6 +170,10 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
   slice.height = params_.robot.scanner_height;
   slice.scans = map.scanners();
   if (best) slice.nbv = best->position;
+  for (const DetectedOpening& op : map.openings())
+    slice.openings.push_back({op.kind == OpeningKind::kDoor,
+                              Point3(op.corners[0].x(), op.corners[0].y(), op.corners[0].z()),
+                              Point3(op.corners[1].x(), op.corners[1].y(), op.corners[1].z())});
   slice.title = std::string(name) + (best ? ": scans and next best view" : ": scans");
   write_map_files(map.tree(), dir, slice);
   write_cloud_ply(map.merged_cloud(), (std::filesystem::path(dir) / "cloud.ply").string());
@@ -280,6 +290,8 @@ void SurveyOutput::write_survey_json(const std::string& stopped_because, const j
   std::filesystem::create_directories(dir_);
   write_file_atomically((std::filesystem::path(dir_) / "survey.json").string(),
                         [&](std::ostream& os) { os << j.dump(2) << "\n"; });
+  write_survey_report(dir_);
+  std::printf("wrote %s/report.html (open it in any browser)\n", dir_.c_str());
 }
 
 }  // namespace semioctree::cli

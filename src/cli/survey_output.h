@@ -27,7 +27,8 @@ class SurveyOutput : public SurveyObserver {
 
   // The record of scan `index` (after scan_done), for keys a command adds.
   nlohmann::json& record(std::size_t index) { return records_.at(index); }
-  // survey.json with `stopped_because` and any extra top-level keys.
+  // survey.json with `stopped_because` and any extra top-level keys, then report.html
+  // from it.
   void write_survey_json(const std::string& stopped_because, const nlohmann::json& extra,
                          const SurveyMap* map) const;
   const std::string& dir() const { return dir_; }
@@ -50,8 +51,8 @@ nlohmann::json pose_json(const Eigen::Isometry3d& scanner_to_survey);
 // floor's leaf layer are then driven over, see floor_layer_clearance).
 void print_floor_layer_note(const RobotGeometry& robot, double leaf);
 
-// Removes survey.json, coverage_missed.ply and the scan_NN/ folders an earlier run left
-// in `dir` (nothing else).
+// Removes survey.json, coverage_missed.ply, the report (survey_report_files) and the
+// scan_NN/ folders an earlier run left in `dir` (nothing else).
 void clear_previous_survey(const std::string& dir);
 // What a survey writes or replaces in its directory (as OutputDir::written).
 std::vector<std::string> survey_files_written();

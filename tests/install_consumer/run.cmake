@@ -35,7 +35,7 @@ build_against_prefix("the reader with the octomap_ext component only"
                      -DONLY_OCTOMAP_EXT=ON -DCMAKE_DISABLE_FIND_PACKAGE_PCL=ON
                      -DCMAKE_DISABLE_FIND_PACKAGE_Eigen3=ON
                      -DCMAKE_DISABLE_FIND_PACKAGE_dynamicEDT3D=ON
-                     -DCMAKE_DISABLE_FIND_PACKAGE_nlohmann_json=ON -DCMAKE_DISABLE_FIND_PACKAGE_PNG=ON)
+                     -DCMAKE_DISABLE_FIND_PACKAGE_nlohmann_json=ON -DCMAKE_DISABLE_FIND_PACKAGE_PkgConfig=ON)
 run_step("the reader (octomap_ext component only)" ${WORK_DIR}/build-octomap-ext/reader
          ${WORK_DIR}/tree.ot)
 message(STATUS "${step_output}")
