@@ -289,6 +289,37 @@ TEST(Nbv, BlindZoneUnderPastScansIsNotAnObstacle) {
       find_candidates(*tree, RobotGeometry{}, {1.0, 2.0, 0}, {Point3(3.0, 3.2, 1.5)}, p).empty());
 }
 
+// The robot stood where it scanned: nothing but the robot stood in its cylinder there,
+// so occluded or unknown octants within its radius of a past scan position are no
+// obstacle, whatever the scan saw of them (a coarse octant at its feet, judged occluded
+// from its sample points). Their part beyond the radius still is; occupied leaves always.
+TEST(Nbv, TheRobotsOwnFootprintAtPastScansIsNoObstacle) {
+  Map m(5, 5, 3);
+  m.walls(4.0, 4.0, 2.4);
+  m.leaves({2.0, 1.6, 0.3}, {2.35, 1.95, 0.65}, Label::kOccluded);  // 0.35 m, a corner at the robot
+  NbvParams p;
+  p.candidate_spacing = 0.1;
+  p.blind_zone_is_free = false;  // this rule alone
+  RobotGeometry robot;
+  robot.radius = 0.408;
+  const Point3 start(2.0, 2.0, 0);
+  const Point3 scanned_here(2.0, 2.0, robot.scanner_height);
+  // Without the position it scanned from, the block boxes the robot in.
+  EXPECT_TRUE(find_candidates(m.t, robot, start, {}, p).empty());
+  const auto freed = find_candidates(m.t, robot, start, {scanned_here}, p);
+  ASSERT_FALSE(freed.empty());
+  // The block's corner beyond the robot's radius is still an obstacle: no candidate's
+  // cylinder reaches its farthest leaf (its centre 0.50 m from the robot).
+  for (const Point3& c : freed)
+    EXPECT_GT(std::hypot(c.x - 2.325, c.y - 1.625), robot.radius + 0.5 * kLeaf)
+        << c.x << ", " << c.y;
+  // An occupied block there (a return fell in it) stays an obstacle.
+  Map occupied(5, 5, 3);
+  occupied.walls(4.0, 4.0, 2.4);
+  occupied.leaves({2.0, 1.6, 0.3}, {2.35, 1.95, 0.65}, Label::kOccupied);
+  EXPECT_TRUE(find_candidates(occupied.t, robot, start, {scanned_here}, p).empty());
+}
+
 // A pruned map (siblings with one label merged, as every occlusion study
 // leaves it) frees the same blind zone as the map before pruning: the rule must not
 // depend on how the cone is subdivided.

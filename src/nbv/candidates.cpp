@@ -137,10 +137,30 @@ std::vector<std::uint8_t> obstacle_columns(const SemiOcTree& tree, const Plane& 
   std::vector<std::uint8_t> obstacle(plane.cells(), 0);
   for (int x = 0; x < nx; ++x) obstacle[plane.index(x, 0)] = obstacle[plane.index(x, ny - 1)] = 1;
   for (int y = 0; y < ny; ++y) obstacle[plane.index(0, y)] = obstacle[plane.index(nx - 1, y)] = 1;
-  auto mark = [&](std::int64_t cx, std::int64_t cy, std::int64_t size) {
+  // The robot stood at every past scan position: nothing else stands in the cylinder it
+  // filled there (a static scene), whatever the scans could see of it. Cells whose centre
+  // lies within the robot's radius of a past position are no obstacle unless a return
+  // fell in them (docs/nbv.md, "The robot's own footprint").
+  std::vector<std::uint8_t> footprint(plane.cells(), 0);
+  const double radius_cells = robot.radius / r;
+  for (const Point3& s : past_scans) {
+    const double sx = s.x / r - 0.5, sy = s.y / r - 0.5;  // in cell indices
+    const auto x_lo = std::int64_t(std::ceil(sx - radius_cells)),
+               x_hi = std::int64_t(std::floor(sx + radius_cells));
+    const auto y_lo = std::int64_t(std::ceil(sy - radius_cells)),
+               y_hi = std::int64_t(std::floor(sy + radius_cells));
+    for (std::int64_t y = std::max(y_lo, plane.y0); y <= std::min(y_hi, plane.y0 + ny - 1); ++y)
+      for (std::int64_t x = std::max(x_lo, plane.x0); x <= std::min(x_hi, plane.x0 + nx - 1); ++x)
+        if ((double(x) - sx) * (double(x) - sx) + (double(y) - sy) * (double(y) - sy) <=
+            radius_cells * radius_cells)
+          footprint[plane.index(int(x - plane.x0), int(y - plane.y0))] = 1;
+  }
+  auto mark = [&](std::int64_t cx, std::int64_t cy, std::int64_t size, bool occupied = true) {
     for (std::int64_t y = cy; y < cy + size; ++y)
-      for (std::int64_t x = cx; x < cx + size; ++x)
-        obstacle[plane.index(int(x - plane.x0), int(y - plane.y0))] = 1;
+      for (std::int64_t x = cx; x < cx + size; ++x) {
+        const std::size_t i = plane.index(int(x - plane.x0), int(y - plane.y0));
+        if (occupied || !footprint[i]) obstacle[i] = 1;
+      }
   };
 
   // Leaf layers of the cylinder: z ∈ [0, top); octants lying wholly below the
@@ -176,7 +196,7 @@ std::vector<std::uint8_t> obstacle_columns(const SemiOcTree& tree, const Plane& 
       rep.specks_freed += std::size_t(size * size * size);
       return;
     }
-    mark(leaf_cell(o.key.k[0]), leaf_cell(o.key.k[1]), size);
+    mark(leaf_cell(o.key.k[0]), leaf_cell(o.key.k[1]), size, l == Label::kOccupied);
   });
   return obstacle;
 }
