@@ -240,6 +240,58 @@ std::vector<std::pair<int, int>> column_runs(const std::vector<std::size_t>& col
   return runs;
 }
 
+// A hole through a wall is a hole in both of its faces: once a scan stood beyond the
+// wall (through one of its doors), the same opening is found on the far face too. Of two
+// openings of one kind on parallel planes less than a wall's thickness apart whose
+// rectangles overlap (IoU ≥ 0.5 across the wall), the one nearer `first_scanner` (the
+// face of the room the survey started in) is kept.
+std::vector<DetectedOpening> drop_far_faces(std::vector<DetectedOpening> found,
+                                            const Point3& first_scanner, const OpeningParams& p,
+                                            OpeningsReport& rep) {
+  const Eigen::Vector3d s0(first_scanner.x, first_scanner.y, first_scanner.z);
+  auto centre = [](const DetectedOpening& o) {
+    return 0.25 * (o.corners[0] + o.corners[1] + o.corners[2] + o.corners[3]);
+  };
+  // The rectangle's extent along u (horizontal, in the wall) and z.
+  auto extent = [](const DetectedOpening& o, const Eigen::Vector3d& u) {
+    double lo = std::numeric_limits<double>::max(), hi = -lo;
+    for (const Eigen::Vector3d& c : o.corners) {
+      lo = std::min(lo, c.dot(u));
+      hi = std::max(hi, c.dot(u));
+    }
+    return std::pair<double, double>(lo, hi);
+  };
+  const double parallel = std::cos(2 * p.max_normal_tilt_deg * M_PI / 180.0);
+  std::vector<bool> dropped(found.size(), false);
+  for (std::size_t i = 0; i < found.size(); ++i)
+    for (std::size_t j = i + 1; j < found.size(); ++j) {
+      const DetectedOpening &a = found[i], &b = found[j];
+      if (dropped[i] || dropped[j] || a.kind != b.kind) continue;
+      if (std::abs(a.wall_normal.dot(b.wall_normal)) < parallel) continue;
+      const Eigen::Vector3d ca = centre(a), cb = centre(b);
+      if (std::abs((cb - ca).dot(a.wall_normal)) > p.max_wall_thickness) continue;
+      const Eigen::Vector3d u(-a.wall_normal.y(), a.wall_normal.x(), 0.0);
+      const auto [au0, au1] = extent(a, u);
+      const auto [bu0, bu1] = extent(b, u);
+      const auto [az0, az1] = extent(a, Eigen::Vector3d::UnitZ());
+      const auto [bz0, bz1] = extent(b, Eigen::Vector3d::UnitZ());
+      const double w = std::min(au1, bu1) - std::max(au0, bu0);
+      const double h = std::min(az1, bz1) - std::max(az0, bz0);
+      if (w <= 0 || h <= 0) continue;
+      const double both = w * h;
+      const double iou = both / ((au1 - au0) * (az1 - az0) + (bu1 - bu0) * (bz1 - bz0) - both);
+      if (iou < 0.5) continue;
+      const bool a_nearer =
+          std::abs((s0 - ca).dot(a.wall_normal)) <= std::abs((s0 - cb).dot(b.wall_normal));
+      dropped[a_nearer ? j : i] = true;
+      ++rep.far_faces;
+    }
+  std::vector<DetectedOpening> kept;
+  for (std::size_t i = 0; i < found.size(); ++i)
+    if (!dropped[i]) kept.push_back(std::move(found[i]));
+  return kept;
+}
+
 }  // namespace
 
 std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceiling_height,
@@ -407,7 +459,7 @@ std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceili
     }
     remaining = rest;
   }
-  return result;
+  return drop_far_faces(std::move(result), scanner_positions.front(), p, rep);
 }
 
 std::optional<double> map_ceiling_height(const SemiOcTree& tree, double min_height) {

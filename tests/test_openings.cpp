@@ -140,6 +140,31 @@ TEST(Openings, FindsDoorAndWindowWithTheirSizes) {
   EXPECT_EQ(label_at(1.5, 0.001, 2.7), Label::kOccupied);
 }
 
+// A door through a 0.25 m wall, scanned from the room and from beyond the wall: the hole
+// is in both faces of the wall, and found on both. It is one door, kept on the face of the
+// room the survey started in (the first scanner's).
+TEST(Openings, ADoorSeenFromBothSidesOfItsWallIsOneDoor) {
+  std::mt19937 rng(11);
+  auto door = [](const Vec3& p) { return p.x() > 1.0 && p.x() < 2.0 && p.z() < 2.1; };
+  Cloud cloud = make_room(4.0, rng, door);
+  const Vec3 X = Vec3::UnitX(), Z = Vec3::UnitZ();
+  add_rect(cloud, Vec3(-0.25, -0.25, 0), X, 6.5, Z, 3.0, 0.02, rng, door);  // the far face
+  auto tree = discretize(cloud, 3.0, {0.05, 0.8});
+  const std::vector<Point3> scanners{{3.0, 3.0, 1.5}, {1.5, -2.0, 1.5}};
+  OpeningsReport report;
+  const auto found = detect_openings(cloud, 3.0, *tree, scanners, {}, &report);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0].kind, OpeningKind::kDoor);
+  EXPECT_NEAR(centre(found[0]).y(), 0.0, 0.03);  // the room's face
+  EXPECT_EQ(report.far_faces, 1u);
+  // Both faces hold it: with walls taken as no thicker than nothing, both doors stay.
+  OpeningParams thin;
+  thin.max_wall_thickness = 0.0;
+  const auto both = detect_openings(cloud, 3.0, *tree, scanners, thin);
+  ASSERT_EQ(both.size(), 2u);
+  EXPECT_NEAR(std::abs(centre(both[0]).y() - centre(both[1]).y()), 0.25, 0.03);
+}
+
 TEST(Openings, OcclusionShadowIsRejectedByLineOfSight) {
   std::mt19937 rng(11);
   const Vec3 scanner(2.5, 4.0, 1.5);

@@ -69,6 +69,13 @@ struct OpeningParams {
   // wall's doorways) does not confirm that wall's holes: it sees the wall
   // edge-on, and its lines along the face would confirm any shadow, m.
   double los_min_scanner_off_wall = 0.3;
+
+  // --- one hole, two faces ---
+  // A hole through a wall is found on both faces once a scan stood beyond the wall.
+  // Parallel planes nearer than this are taken as the two faces of one wall: the thickest
+  // walls of the buildings surveyed; two walls with a passage between them (a corridor)
+  // stand farther apart, as a robot passes between them, m.
+  double max_wall_thickness = 0.6;
 };
 
 enum class OpeningKind { kDoor, kWindow };
@@ -101,6 +108,7 @@ struct OpeningsReport {
   std::size_t candidates = 0;             // holes of door or window size
   std::vector<DetectedOpening> rejected;  // candidates failing the LOS test
   std::size_t los_rays = 0;               // segments cast for the LOS test
+  std::size_t far_faces = 0;  // openings found again on the far face of their wall, dropped
 };
 
 // `levelled` has the floor at z = 0 and floor/ceiling points removed (see
