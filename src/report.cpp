@@ -135,12 +135,17 @@ std::string scan_folder(std::size_t index) {
 // The charts of the survey's progress; each only when the survey has its data.
 void write_charts(const json& survey, const fs::path& dir, std::vector<std::string>& written) {
   const json& scans = survey["scans"];
-  ChartSeries stop{"stop percentage (Eq 5)", {200, 0, 0}, {}, {}, ChartSeries::Values::kBelow};
-  for (const json& s : scans)
-    if (has_number(s, "stop_percent") && has_number(s, "index")) {
-      stop.x.push_back(s["index"].get<double>());
-      stop.y.push_back(s["stop_percent"].get<double>());
-    }
+  // A scan record's `key` against its index, for the scans that have both.
+  auto per_scan = [&](const char* key, ChartSeries series) {
+    for (const json& s : scans)
+      if (has_number(s, key) && has_number(s, "index")) {
+        series.x.push_back(s["index"].get<double>());
+        series.y.push_back(s[key].get<double>());
+      }
+    return series;
+  };
+  const ChartSeries stop = per_scan(
+      "stop_percent", {"stop percentage (Eq 5)", {200, 0, 0}, {}, {}, ChartSeries::Values::kBelow});
   if (!stop.x.empty()) {
     LineChart c;
     c.title = "Stop percentage after each scan (log scale)";
@@ -155,12 +160,8 @@ void write_charts(const json& survey, const fs::path& dir, std::vector<std::stri
     write_line_chart(c, (dir / kProgressChart).string());
     written.push_back(kProgressChart);
   }
-  ChartSeries covered{"surface covered", {0, 130, 60}, {}, {}, ChartSeries::Values::kBelow};
-  for (const json& s : scans)
-    if (has_number(s, "coverage_percent") && has_number(s, "index")) {
-      covered.x.push_back(s["index"].get<double>());
-      covered.y.push_back(s["coverage_percent"].get<double>());
-    }
+  const ChartSeries covered = per_scan(
+      "coverage_percent", {"surface covered", {0, 130, 60}, {}, {}, ChartSeries::Values::kBelow});
   if (!covered.x.empty()) {
     LineChart c;
     c.title = "Surface coverage after each scan";
