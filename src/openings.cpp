@@ -17,6 +17,8 @@
 #include <set>
 #include <tuple>
 
+#include "scanner_limits.h"
+
 namespace semioctree {
 
 const char* to_string(OpeningKind kind) {
@@ -62,7 +64,10 @@ struct WallGrid {
   int cols = 0, rows = 0;
   double cell = 0, u0 = 0;
   std::vector<std::uint8_t> occupied;  // row-major (r·cols + c)
-  std::vector<std::int8_t> los;        // -1 not yet cast, 0 hidden, 1 seen directly
+  // Per cell and scanner (cell · scanners + scanner): -1 not yet cast, 0 the line is
+  // blocked, 1 it is free up to the LOS margin.
+  std::vector<std::int8_t> los;
+  std::size_t scanners = 0;
   bool occ(int c, int r) const { return occupied[std::size_t(r) * cols + c] != 0; }
 };
 
@@ -127,9 +132,9 @@ std::vector<CellRect> find_hole_candidates(const WallGrid& g, double ceiling,
         const double top = (r1 + 1) * g.cell;
         const bool door = bottom <= p.floor_tolerance + eps && width + eps >= p.door_min_width &&
                           width <= p.door_max_width + eps && top + eps >= p.door_min_height &&
-                          top <= p.door_max_height + eps;
+                          top <= p.door_max_height + eps && top <= ceiling - p.min_lintel + eps;
         const bool window =
-            bottom + eps >= p.window_min_sill && top <= ceiling - p.window_min_lintel + eps &&
+            bottom + eps >= p.window_min_sill && top <= ceiling - p.min_lintel + eps &&
             width + eps >= p.window_min_width && width <= p.window_max_width + eps &&
             top - bottom + eps >= p.window_min_height && top - bottom <= p.window_max_height + eps;
         if (door)
@@ -142,62 +147,128 @@ std::vector<CellRect> find_hole_candidates(const WallGrid& g, double ceiling,
   return out;
 }
 
-// Direct line of sight from any scanner to the cell centre: the segment is
+// Direct line of sight from scanner `a` to the cell centre `target`: the segment is
 // traversed through the octants and stops at the first occupied one. It ends
 // `margin` in front of the wall plane (measured along the wall's normal, not
 // along the segment) because the leaves of the wall's surface around the hole
 // are occupied and reach up to a leaf in front of the plane: cut along the
 // segment, an oblique line to a cell beside a jamb still ended inside the
 // jamb's surface leaf, and a whole column of the hole went unseen.
-bool cell_visible(const SemiOcTree& tree, const std::vector<Point3>& scanners,
-                  const Eigen::Vector3d& target, const Eigen::Vector3d& wall_normal, double margin,
-                  double min_off_wall, std::size_t& rays) {
-  for (const Point3& s : scanners) {
+bool line_reaches_wall(const SemiOcTree& tree, const Eigen::Vector3d& a,
+                       const Eigen::Vector3d& target, double off_wall, double margin) {
+  const Eigen::Vector3d end = target + (a - target) * (margin / off_wall);
+  const TraversalEnd e =
+      tree.traverse(Point3(a.x(), a.y(), a.z()), Point3(end.x(), end.y(), end.z()),
+                    [](const RayStep& step) { return step.label() != Label::kOccupied; });
+  return e == TraversalEnd::kReachedEnd;
+}
+
+// What the LOS test of one hole needs beside the map.
+struct LosTest {
+  const SemiOcTree& tree;
+  const std::vector<ScannerView>& scanners;
+  std::vector<detail::ScannerLimits> limits;  // one per scanner
+  double margin = 0;                          // OpeningParams::los_end_margin_leaves, m
+  double min_off_wall = 0;                    // OpeningParams::los_min_scanner_off_wall
+  double max_slack_share = 0;  // of the hole's width and height: los_min_fraction / 2
+  std::size_t& rays;
+};
+
+// Whether some scanner sees the cell directly, as evidence for a hole of the given
+// size. A line that ends `margin` in front of the wall cannot tell the hole from an
+// object standing against the wall (a cabinet) within margin / tan(incidence) of the
+// cell along the wall: the line ends before it meets the object's side. That slack
+// grows without bound as the line grazes the wall. Seen from both ends of a shadow of
+// width W, lines with slack s confirm 2s of it; so a line confirms a cell only while its
+// slack, along the wall and upright, is below los_min_fraction / 2 of the hole's width
+// and height: a shadow can then never reach the 85 % (docs/occlusion.md).
+bool cell_visible(WallGrid& g, std::size_t cell, const Eigen::Vector3d& target,
+                  const Eigen::Vector3d& wall_normal, const Eigen::Vector3d& u_axis, double width,
+                  double height, const LosTest& t) {
+  for (std::size_t i = 0; i < t.scanners.size(); ++i) {
+    const ScannerView& view = t.scanners[i];
+    const Point3& s = view.position;
     const Eigen::Vector3d a(s.x, s.y, s.z);
-    const double off_wall = std::abs((a - target).dot(wall_normal));
+    const Eigen::Vector3d d = a - target;
+    const double off_wall = std::abs(d.dot(wall_normal));
     // A scanner in the wall's plane (a scan taken in one of its doorways) sees
     // the wall edge-on: its lines run along the face and would confirm any hole.
-    if (off_wall < min_off_wall || off_wall <= margin) continue;
-    const Eigen::Vector3d end = target + (a - target) * (margin / off_wall);
-    ++rays;
-    const TraversalEnd e =
-        tree.traverse(Point3(a.x(), a.y(), a.z()), Point3(end.x(), end.y(), end.z()),
-                      [](const RayStep& step) { return step.label() != Label::kOccupied; });
-    if (e == TraversalEnd::kReachedEnd) return true;
+    if (off_wall < t.min_off_wall || off_wall <= t.margin) continue;
+    // A scanner sees only within its range and elevation limits: a free line above its
+    // highest elevation is no sight (the wall over a cabinet beside a low scanner).
+    if (!t.limits[i].in_view(s, Point3(target.x(), target.y(), target.z()))) continue;
+    const double slack_along = t.margin * std::abs(d.dot(u_axis)) / off_wall;
+    const double slack_up = t.margin * std::abs(d.z()) / off_wall;
+    if (slack_along > t.max_slack_share * width || slack_up > t.max_slack_share * height) continue;
+    std::int8_t& v = g.los[cell * g.scanners + i];
+    if (v < 0) {
+      ++t.rays;
+      v = line_reaches_wall(t.tree, a, target, off_wall, t.margin) ? 1 : 0;
+    }
+    if (v == 1) return true;
   }
   return false;
 }
 
-double los_fraction(WallGrid& g, const WallFrame& f, const CellRect& r, const SemiOcTree& tree,
-                    const std::vector<Point3>& scanners, double margin, double min_off_wall,
-                    std::size_t& rays) {
+// The cells of the hole seen directly (row-major over the rectangle) and their share.
+struct HoleSight {
+  std::vector<std::uint8_t> seen;
+  double fraction = 0;
+};
+
+HoleSight hole_sight(WallGrid& g, const WallFrame& f, const CellRect& r, const LosTest& t) {
+  HoleSight h;
+  const int w = r.c1 - r.c0 + 1, hgt = r.r1 - r.r0 + 1;
+  h.seen.assign(std::size_t(w) * hgt, 0);
   std::size_t seen = 0;
   for (int row = r.r0; row <= r.r1; ++row)
     for (int c = r.c0; c <= r.c1; ++c) {
-      std::int8_t& v = g.los[std::size_t(row) * g.cols + c];
-      if (v < 0) {
-        const Eigen::Vector3d centre = f.at(g.u0 + (c + 0.5) * g.cell, (row + 0.5) * g.cell);
-        v = cell_visible(tree, scanners, centre, f.normal, margin, min_off_wall, rays) ? 1 : 0;
-      }
-      seen += std::size_t(v);
+      const Eigen::Vector3d centre = f.at(g.u0 + (c + 0.5) * g.cell, (row + 0.5) * g.cell);
+      const bool v = cell_visible(g, std::size_t(row) * g.cols + c, centre, f.normal, f.u_axis,
+                                  w * g.cell, hgt * g.cell, t);
+      h.seen[std::size_t(row - r.r0) * w + (c - r.c0)] = v;
+      seen += v;
     }
-  return double(seen) / double(r.area());
+  h.fraction = double(seen) / double(r.area());
+  return h;
 }
 
-// The rule for partly hidden holes (OpeningParams::partly_hidden_min_los):
-// the cells seen directly reach the sides that define the rectangle.
-bool seen_cells_span_rect(const WallGrid& g, const CellRect& r) {
-  auto seen = [&](int c, int row) { return g.los[std::size_t(row) * g.cols + c] == 1; };
-  bool left = false, right = false, top = false, bottom = false;
-  for (int row = r.r0; row <= r.r1; ++row) {
-    left = left || seen(r.c0, row);
-    right = right || seen(r.c1, row);
+// The rule for partly hidden holes (OpeningParams::partly_hidden_min_los): one
+// connected region of seen cells (8-neighbours) reaches the sides that define the
+// rectangle. What is seen of a door behind a bench is one band across it; what lines
+// from either end see of a cabinet's shadow are two strips, each at one side only.
+bool seen_region_spans_rect(const HoleSight& h, const CellRect& r) {
+  const int w = r.c1 - r.c0 + 1, hgt = r.r1 - r.r0 + 1;
+  std::vector<int> region(h.seen.size(), -1);
+  int next = 0;
+  for (std::size_t start = 0; start < h.seen.size(); ++start) {
+    if (!h.seen[start] || region[start] >= 0) continue;
+    bool left = false, right = false, top = false, bottom = false;
+    std::vector<std::size_t> stack{start};
+    region[start] = next;
+    while (!stack.empty()) {
+      const std::size_t i = stack.back();
+      stack.pop_back();
+      const int c = int(i % std::size_t(w)), row = int(i / std::size_t(w));
+      left = left || c == 0;
+      right = right || c == w - 1;
+      bottom = bottom || row == 0;
+      top = top || row == hgt - 1;
+      for (int dr = -1; dr <= 1; ++dr)
+        for (int dc = -1; dc <= 1; ++dc) {
+          const int cc = c + dc, rr = row + dr;
+          if (cc < 0 || cc >= w || rr < 0 || rr >= hgt) continue;
+          const std::size_t j = std::size_t(rr) * w + cc;
+          if (h.seen[j] && region[j] < 0) {
+            region[j] = next;
+            stack.push_back(j);
+          }
+        }
+    }
+    if (left && right && top && (r.kind == OpeningKind::kDoor || bottom)) return true;
+    ++next;
   }
-  for (int c = r.c0; c <= r.c1; ++c) {
-    top = top || seen(c, r.r1);
-    bottom = bottom || seen(c, r.r0);
-  }
-  return left && right && top && (r.kind == OpeningKind::kDoor || bottom);
+  return false;
 }
 
 DetectedOpening make_opening(const WallGrid& g, const WallFrame& f, const CellRect& r, double los,
@@ -299,13 +370,35 @@ std::vector<DetectedOpening> drop_far_faces(std::vector<DetectedOpening> found,
 std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceiling_height,
                                              const SemiOcTree& tree,
                                              const std::vector<Point3>& scanner_positions,
+                                             const OpeningParams& params, OpeningsReport* report) {
+  std::vector<ScannerView> views;
+  for (const Point3& s : scanner_positions) {
+    ScannerView v(s);
+    v.min_range = 0;
+    v.max_range = std::numeric_limits<double>::infinity();
+    v.elevation_min_deg = -90;
+    v.elevation_max_deg = 90;
+    views.push_back(v);
+  }
+  return detect_openings(levelled, ceiling_height, tree, views, params, report);
+}
+
+std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceiling_height,
+                                             const SemiOcTree& tree,
+                                             const std::vector<ScannerView>& scanners,
                                              const OpeningParams& p, OpeningsReport* report) {
+  std::vector<Point3> scanner_positions;
+  for (const ScannerView& v : scanners) scanner_positions.push_back(v.position);
   OpeningsReport local_report;
   OpeningsReport& rep = report ? *report : local_report;
   rep = OpeningsReport{};
   std::vector<DetectedOpening> result;
   const double cell = p.cell > 0 ? p.cell : tree.leaf_size();
   const double margin = p.los_end_margin_leaves * tree.leaf_size();
+  LosTest los_test{
+      tree,        scanners, {}, margin, p.los_min_scanner_off_wall, 0.5 * p.los_min_fraction,
+      rep.los_rays};
+  for (const ScannerView& v : scanners) los_test.limits.emplace_back(v);
   const int rows = int(std::ceil(ceiling_height / cell - 1e-9));
   if (rows <= 0 || scanner_positions.empty()) return result;
 
@@ -422,7 +515,8 @@ std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceili
         }
       const auto filled = std::size_t(std::count(g.occupied.begin(), g.occupied.end(), 1));
       if (double(filled) < p.min_wall_fill * double(g.occupied.size())) continue;
-      g.los.assign(g.occupied.size(), -1);
+      g.scanners = scanner_positions.size();
+      g.los.assign(g.occupied.size() * g.scanners, -1);
 
       const int wall_index = int(rep.walls.size());
       DetectedWall w;
@@ -445,12 +539,12 @@ std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceili
         bool overlaps = false;
         for (const CellRect& k : kept) overlaps = overlaps || k.overlaps(r);
         if (overlaps) continue;
-        const double los = los_fraction(g, frame, r, tree, scanner_positions, margin,
-                                        p.los_min_scanner_off_wall, rep.los_rays);
+        const HoleSight sight = hole_sight(g, frame, r, los_test);
+        const double los = sight.fraction;
         const bool confirmed =
             los + 1e-12 >= p.los_min_fraction ||
             (p.partly_hidden_min_los > 0 && los + 1e-12 >= p.partly_hidden_min_los &&
-             seen_cells_span_rect(g, r));
+             seen_region_spans_rect(sight, r));
         if (confirmed) {
           kept.push_back(r);
           result.push_back(make_opening(g, frame, r, los, wall_index));

@@ -27,7 +27,7 @@ namespace {
 struct HorizontalPlane {
   Eigen::Vector3d normal;   // oriented to +z
   double d = 0;             // normal·p + d = 0
-  std::size_t inliers = 0;  // on the full cloud
+  std::size_t inliers = 0;  // on the full cloud (estimated from a random subset)
   // Its band of heights holds at least twice as many points as either band of the same
   // width next to it: a horizontal surface, not a band of wall (docs/data-flow.md).
   bool stands_out = false;
@@ -36,19 +36,56 @@ struct HorizontalPlane {
   }
 };
 
-// Horizontal planes on a random subset, largest first.
-std::vector<HorizontalPlane> find_horizontal_planes(const Cloud& input, const PreprocessParams& p) {
-  Cloud::Ptr work(new Cloud);
-  if (input.size() > p.ransac_sample) {
-    std::mt19937 rng(12345);
-    std::vector<std::size_t> idx(input.size());
-    std::iota(idx.begin(), idx.end(), 0);
-    std::shuffle(idx.begin(), idx.end(), rng);
-    work->reserve(p.ransac_sample);
-    for (std::size_t i = 0; i < p.ransac_sample; ++i) work->push_back(input[idx[i]]);
-  } else {
-    *work = input;
+// `count` points of `cloud` drawn at random (all of them if it has no more).
+Cloud::Ptr random_subset(const Cloud& cloud, std::size_t count) {
+  Cloud::Ptr out(new Cloud);
+  if (cloud.size() <= count) {
+    *out = cloud;
+    return out;
   }
+  std::mt19937 rng(12345);
+  std::vector<std::size_t> idx(cloud.size());
+  std::iota(idx.begin(), idx.end(), 0);
+  std::shuffle(idx.begin(), idx.end(), rng);
+  out->reserve(count);
+  for (std::size_t i = 0; i < count; ++i) out->push_back(cloud[idx[i]]);
+  return out;
+}
+
+// The points RANSAC searches the first plane among: one per cube whose side is the
+// thickness of a plane's inlier band (2 · ransac_distance), then a random subset of those
+// if still too many. A scanner's returns are dense near it and sparse far off, so among
+// the returns themselves the walls beside the scanner count many times over and a floor
+// beyond its lowest elevation (or its blind zone) hardly at all: a plane tilted through
+// those near walls out-counted the floor, and the floor alone levelled a ceiling-less
+// scan 10° askew. One point per cube makes a plane's inlier count its area within the
+// band, whatever the scan's density (docs/data-flow.md).
+Cloud::Ptr area_uniform_subset(const Cloud& input, const PreprocessParams& p) {
+  Cloud spread;
+  const double inv = 1.0 / (2.0 * p.ransac_distance);
+  PackedKeyMap<std::uint8_t> cubes(std::min<std::size_t>(input.size(), 4 * p.ransac_sample));
+  auto cube = [inv](float v) { return std::uint64_t(std::int64_t(std::floor(double(v) * inv))); };
+  for (const auto& q : input) {
+    if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z)) continue;
+    if (cubes.insert(pack_cell_parts(cube(q.x), cube(q.y), cube(q.z)))) spread.push_back(q);
+  }
+  return random_subset(spread, p.ransac_sample);
+}
+
+// Where RANSAC searches the first horizontal plane: among the returns (a random subset
+// of them), or among points spread evenly over the surfaces (area_uniform_subset).
+enum class FirstPlaneAmong { kReturns, kSurfaces };
+
+// Horizontal planes, largest first: the first found by RANSAC (among `among`), the others
+// parallel to it. Their sizes (`inliers`, which the choice of the floor compares) are
+// counted among the returns either way: a floor seen all round the scanner holds more
+// returns than the ground beyond a window, however far that ground stretches.
+std::vector<HorizontalPlane> find_horizontal_planes(const Cloud& input, const PreprocessParams& p,
+                                                    FirstPlaneAmong among) {
+  const Cloud::Ptr work = random_subset(input, p.ransac_sample);
+  const Cloud::Ptr search =
+      among == FirstPlaneAmong::kReturns ? work : area_uniform_subset(input, p);
+  if (work->empty() || search->empty()) return {};
   const double scale = double(input.size()) / double(work->size());
   pcl::SACSegmentation<pcl::PointXYZ> seg;  // deterministic seed by default
   seg.setOptimizeCoefficients(true);
@@ -60,13 +97,15 @@ std::vector<HorizontalPlane> find_horizontal_planes(const Cloud& input, const Pr
   seg.setMaxIterations(p.ransac_iterations);
 
   std::vector<HorizontalPlane> planes;
-  const std::size_t min_inliers =
-      std::max<std::size_t>(std::size_t(p.min_plane_fraction * double(work->size())), 50);
+  auto min_inliers_of = [&](const Cloud& c) {
+    return std::max<std::size_t>(std::size_t(p.min_plane_fraction * double(c.size())), 50);
+  };
+  const std::size_t min_inliers = min_inliers_of(*work);
   pcl::PointIndices::Ptr inliers(new pcl::PointIndices);
   pcl::ModelCoefficients coeffs;
-  seg.setInputCloud(work);
+  seg.setInputCloud(search);
   seg.segment(*inliers, coeffs);
-  if (inliers->indices.size() < min_inliers || coeffs.values.size() != 4) return planes;
+  if (inliers->indices.size() < min_inliers_of(*search) || coeffs.values.size() != 4) return planes;
   HorizontalPlane first;
   first.normal = Eigen::Vector3d(coeffs.values[0], coeffs.values[1], coeffs.values[2]);
   first.d = coeffs.values[3];
@@ -77,7 +116,14 @@ std::vector<HorizontalPlane> find_horizontal_planes(const Cloud& input, const Pr
     first.normal = -first.normal;
     first.d = -first.d;
   }
-  first.inliers = std::size_t(double(inliers->indices.size()) * scale);
+  std::size_t first_inliers = inliers->indices.size();
+  if (among == FirstPlaneAmong::kSurfaces) {  // counted among the returns
+    first_inliers = 0;
+    for (const auto& q : *work)
+      first_inliers += std::fabs(first.normal.dot(Eigen::Vector3d(q.x, q.y, q.z)) + first.d) <=
+                       p.ransac_distance;
+  }
+  first.inliers = std::size_t(double(first_inliers) * scale);
   planes.push_back(first);
 
   // The other planes are parallel to the first (floor and ceiling of one room):
@@ -224,26 +270,23 @@ Cloud::Ptr decimate(const Cloud& cloud, double spacing) {
   return out;
 }
 
-PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
-  PreprocessResult r;
-  r.input_points = input.size();
-  if (input.size() < p.min_points) {
-    std::ostringstream m;
-    m << "too few points to preprocess: " << input.size() << " (need at least " << p.min_points
-      << ")";
-    throw PreprocessError(m.str());
-  }
-  const auto planes = find_horizontal_planes(input, p);
-  if (planes.empty())
-    throw PreprocessError("no horizontal plane found (no floor and no ceiling in the cloud?)");
+namespace {
+
+// The floor and the ceiling among the planes (indices into them).
+struct FloorAndCeiling {
+  std::size_t floor = 0;
+  std::optional<std::size_t> ceiling;  // none: no ceiling found
+};
+
+FloorAndCeiling choose_floor_and_ceiling(const std::vector<HorizontalPlane>& planes,
+                                         const Eigen::Vector4f& centroid,
+                                         const PreprocessParams& p) {
   // Floor: the lowest horizontal plane below the cloud's centroid that holds
   // at least a third as many points as the largest one there. Not simply the
   // lowest: a scanner near a window also sees the ground outside, lower than
   // the floor but a small plane (the floor lies all around the scanner).
   // Not simply the largest: a big table can out-count a cluttered floor.
   // Heights compared at the centroid.
-  Eigen::Vector4f centroid;
-  pcl::compute3DCentroid(input, centroid);
   const Eigen::Vector2d c(centroid.x(), centroid.y());
   auto by_height = [&](const auto& a, const auto& b) { return a.height_at(c) < b.height_at(c); };
   auto lowest = std::min_element(planes.begin(), planes.end(), by_height);
@@ -263,8 +306,48 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   auto highest = planes.end();
   for (auto it = planes.begin(); it != planes.end(); ++it)
     if (it->stands_out && (highest == planes.end() || by_height(*highest, *it))) highest = it;
-  r.ceiling_found =
-      highest != planes.end() && highest->height_at(c) - lowest->height_at(c) >= p.min_room_height;
+  FloorAndCeiling fc;
+  fc.floor = std::size_t(lowest - planes.begin());
+  if (highest != planes.end() && highest->height_at(c) - lowest->height_at(c) >= p.min_room_height)
+    fc.ceiling = std::size_t(highest - planes.begin());
+  return fc;
+}
+
+}  // namespace
+
+PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
+  PreprocessResult r;
+  r.input_points = input.size();
+  if (input.size() < p.min_points) {
+    std::ostringstream m;
+    m << "too few points to preprocess: " << input.size() << " (need at least " << p.min_points
+      << ")";
+    throw PreprocessError(m.str());
+  }
+  // The first plane is searched among the returns. A ceiling found parallel to it, a
+  // room height above the floor, confirms its tilt. Without one the floor alone must
+  // level the cloud, and a floor seen beyond the scanner's lowest elevation is sparse
+  // among returns that crowd on the walls beside it: the first plane is then searched
+  // again among points spread evenly over the surfaces (area_uniform_subset), and that
+  // search decides (docs/data-flow.md).
+  std::vector<HorizontalPlane> planes = find_horizontal_planes(input, p, FirstPlaneAmong::kReturns);
+  if (planes.empty())
+    throw PreprocessError("no horizontal plane found (no floor and no ceiling in the cloud?)");
+  Eigen::Vector4f centroid;
+  pcl::compute3DCentroid(input, centroid);
+  const Eigen::Vector2d c(centroid.x(), centroid.y());
+  FloorAndCeiling fc = choose_floor_and_ceiling(planes, centroid, p);
+  if (!fc.ceiling) {
+    std::vector<HorizontalPlane> spread =
+        find_horizontal_planes(input, p, FirstPlaneAmong::kSurfaces);
+    if (!spread.empty()) {
+      planes = std::move(spread);
+      fc = choose_floor_and_ceiling(planes, centroid, p);
+    }
+  }
+  const HorizontalPlane* lowest = &planes[fc.floor];
+  const HorizontalPlane* highest = fc.ceiling ? &planes[*fc.ceiling] : nullptr;
+  r.ceiling_found = highest != nullptr;
   // Level by the floor: its normal refined by a least-squares fit to all its
   // inliers in the full cloud (RANSAC saw a subset only).
   const Eigen::Vector3d n = refine_normal(input, *lowest, p.ransac_distance);

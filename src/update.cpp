@@ -164,8 +164,7 @@ ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,
   rep.seconds_occupancy = seconds_since(t0);
 
   t0 = Clock::now();
-  openings_ =
-      detect_openings(*merged_, ceiling_, *tree_, scanners_, params_.openings, &rep.openings);
+  openings_ = detect_openings(*merged_, ceiling_, *tree_, views(), params_.openings, &rep.openings);
   // The map's doors and windows are the openings found now: earlier labels go
   // (unknown: re-decided below) and the openings label their leaves afresh.
   relabel(*tree_, octants_labelled(*tree_, kOpeningLabels), Label::kUnknown);

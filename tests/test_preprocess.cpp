@@ -25,6 +25,15 @@ std::pair<double, double> eq1_angles(double alpha_deg, double beta_deg) {
   return {std::atan(n.x() / n.z()) * 180 / M_PI, std::atan(n.y() / n.z()) * 180 / M_PI};
 }
 
+// The cloud tilted by (a, b) was levelled by its floor alone: Eq 1 angles within 0.1°, no
+// ceiling found.
+void expect_levelled_without_ceiling(const PreprocessResult& r, double a, double b) {
+  const auto [want_a, want_b] = eq1_angles(a, b);
+  EXPECT_NEAR(r.alpha_deg, want_a, 0.1) << "alpha for tilt " << a << ", " << b;
+  EXPECT_NEAR(r.beta_deg, want_b, 0.1) << "beta for tilt " << a << ", " << b;
+  EXPECT_FALSE(r.ceiling_found);
+}
+
 TEST(Preprocess, RecoversKnownTiltWithinATenthOfADegree) {
   const auto room = testing::synthetic_room();
   for (const auto& [a, b] :
@@ -56,10 +65,7 @@ TEST(Preprocess, LevelsByTheFloorAloneWithoutACeiling) {
   for (const auto& [a, b] : {std::pair{3.0, -2.0}, std::pair{-7.5, 4.0}, std::pair{0.0, 0.0}}) {
     const auto tilted = testing::tilt(*room, a, b);
     const PreprocessResult r = preprocess(*tilted);
-    const auto [want_a, want_b] = eq1_angles(a, b);
-    EXPECT_NEAR(r.alpha_deg, want_a, 0.1) << "alpha for tilt " << a << ", " << b;
-    EXPECT_NEAR(r.beta_deg, want_b, 0.1) << "beta for tilt " << a << ", " << b;
-    EXPECT_FALSE(r.ceiling_found);
+    expect_levelled_without_ceiling(r, a, b);
     EXPECT_EQ(r.height_from, RoomHeightFrom::kPoints);
     EXPECT_EQ(r.ceiling.removed, 0u);
     // The top of the walls (their last row of points is at about 3 m).
@@ -92,6 +98,20 @@ TEST(Preprocess, LevelsByTheFloorAloneWithoutACeiling) {
   EXPECT_TRUE(closed.ceiling_found);
   EXPECT_EQ(closed.height_from, RoomHeightFrom::kCeiling);
   EXPECT_NEAR(closed.ceiling_height, 3.0, 0.01);
+}
+
+// A scan without a ceiling whose scanner looks down no further than -35°: its returns
+// crowd on the walls beside it (it stands 0.7 m from two of them) while the floor shows
+// only as a sparse ring beyond 2.6 m. The floor must still level it: planes are searched
+// among points spread evenly over the surfaces, not over the returns.
+TEST(Preprocess, LevelsAScanCrowdedOnNearWallsByItsSparseFloor) {
+  const auto room = testing::scanned_open_room(12, 9, 3, 0.7, 0.7, 1.8, -35.0, 0.2);
+  for (const auto& [a, b] : {std::pair{0.0, 0.0}, std::pair{2.0, -3.0}, std::pair{-4.0, 1.5}}) {
+    const auto tilted = testing::tilt(*room, a, b);
+    const PreprocessResult r = preprocess(*tilted);
+    expect_levelled_without_ceiling(r, a, b);
+    EXPECT_NEAR(r.ceiling_height, 3.0, 0.05);
+  }
 }
 
 TEST(Preprocess, RemovesFloorAndCeilingWithinTwoSigma) {

@@ -10,9 +10,11 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstddef>
+#include <memory>
 #include <optional>
 #include <vector>
 
+#include "semioctree/occlusion.h"
 #include "semioctree/octomap_ext/semioctree.h"
 #include "semioctree/scan_io.h"
 
@@ -39,6 +41,12 @@ struct OpeningParams {
   double cell = 0.0;        // grid cell side, m (0: the tree's leaf size)
   int min_cell_points = 1;  // a cell with at least this many points is occupied
 
+  // Wall left between a door's or a window's top and the ceiling, m. A hole whose top
+  // row is the ceiling's own band (the returns of the ceiling that its cut left, a few
+  // cm under it) is open above, not enclosed: beyond the inner corner of an L-shaped
+  // room a wall's plane runs on through open space from floor to ceiling.
+  double min_lintel = 0.1;
+
   // --- doors: holes reaching the floor ---
   double door_min_width = 0.6, door_max_width = 2.5;    // m
   double door_min_height = 1.8, door_max_height = 2.6;  // m
@@ -48,7 +56,6 @@ struct OpeningParams {
   double window_min_width = 0.4, window_max_width = 4.0;    // m
   double window_min_height = 0.4, window_max_height = 2.5;  // m
   double window_min_sill = 0.3;                             // m above the floor
-  double window_min_lintel = 0.1;  // wall left between the window's top and the ceiling, m
 
   // --- confirmation by line of sight ---
   double los_min_fraction = 0.85;  // share of the hole's cells seen directly (paper: 85 %)
@@ -113,7 +120,15 @@ struct OpeningsReport {
 
 // `levelled` has the floor at z = 0 and floor/ceiling points removed (see
 // preprocess); `tree` is its occupancy analysis (see discretize). Openings
-// overlapping a larger confirmed one on the same wall are dropped.
+// overlapping a larger confirmed one on the same wall are dropped. A scanner's line
+// confirms a cell only within its range and elevation limits (ScannerView; its returns
+// are not used: a window onto the open sky gives none, and is still an opening).
+std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceiling_height,
+                                             const SemiOcTree& tree,
+                                             const std::vector<ScannerView>& scanners,
+                                             const OpeningParams& params = {},
+                                             OpeningsReport* report = nullptr);
+// The same for scanners known by their positions alone: no limits.
 std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceiling_height,
                                              const SemiOcTree& tree,
                                              const std::vector<Point3>& scanner_positions,

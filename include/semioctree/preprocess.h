@@ -1,5 +1,6 @@
 // Stage 1 (paper 2.1): level the cloud and cut floor and ceiling out of it.
-// RANSAC finds the largest horizontal plane (normal within max_tilt_deg of z),
+// RANSAC finds the largest horizontal plane (normal within max_tilt_deg of z) among
+// points spread evenly over the surfaces (one per cube 2 · ransac_distance wide),
 // the other horizontal planes are the peaks of the heights along its normal
 // (floor and ceiling are parallel); the rotation of Eq 1-2 levels them, a translation puts
 // the floor at z = 0; a Gaussian fitted to the floor and the ceiling peaks of
@@ -23,7 +24,7 @@ struct PreprocessParams {
   double max_tilt_deg = 15.0;     // a floor/ceiling normal is within this angle of z
   double ransac_distance = 0.03;  // RANSAC inlier distance, m
   int ransac_iterations = 500;
-  std::size_t ransac_sample = 60000;  // planes are searched in a random subset this large
+  std::size_t ransac_sample = 60000;  // planes are searched in subsets this large
   double min_plane_fraction = 0.01;   // a floor/ceiling holds at least this share of points
   double min_room_height = 1.8;       // floor and ceiling at least this far apart, m
   double histogram_bin = 0.01;        // z histogram bin, m

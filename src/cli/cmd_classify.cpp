@@ -56,8 +56,9 @@ void add_classify_command(CLI::App& app) {
                 seconds_since(t0));
     t0 = Clock::now();
     OpeningsReport orep;
-    const auto openings = detect_openings(*cloud.pre.cloud, cloud.pre.ceiling_height, *tree,
-                                          cloud.scanners, OpeningParams{}, &orep);
+    const std::vector<ScannerView> views = scanner_views(cloud.scanners, o->limits, cloud.returns);
+    const auto openings = detect_openings(*cloud.pre.cloud, cloud.pre.ceiling_height, *tree, views,
+                                          OpeningParams{}, &orep);
     label_openings(*tree, openings);
     std::printf(
         "openings: %zu walls, %zu candidates, %zu confirmed, %zu rejected as occlusion shadows "
@@ -68,8 +69,7 @@ void add_classify_command(CLI::App& app) {
       std::printf("  %-6s %.2f x %.2f m, sill %.2f m, line of sight %.0f %%\n", to_string(op.kind),
                   op.width, op.height, op.sill, 100 * op.los_fraction);
     t0 = Clock::now();
-    const OcclusionReport rep =
-        study_occlusion(*tree, scanner_views(cloud.scanners, o->limits, cloud.returns));
+    const OcclusionReport rep = study_occlusion(*tree, views);
     tree->compact();
     const DiscretizationRun run = describe_run(*tree, seconds_since(t0));
     std::printf(

@@ -67,9 +67,11 @@ void add_compare_command(CLI::App& app) {
         const auto t0 = Clock::now();
         const auto tree = discretize(*cloud.pre.cloud, cloud.pre.ceiling_height, p);
         // Table 1 needs every class: doors and windows, then the occlusion study.
-        label_openings(*tree, detect_openings(*cloud.pre.cloud, cloud.pre.ceiling_height, *tree,
-                                              cloud.scanners));
-        study_occlusion(*tree, scanner_views(cloud.scanners, o->limits, cloud.returns));
+        const std::vector<ScannerView> views =
+            scanner_views(cloud.scanners, o->limits, cloud.returns);
+        label_openings(*tree,
+                       detect_openings(*cloud.pre.cloud, cloud.pre.ceiling_height, *tree, views));
+        study_occlusion(*tree, views);
         DiscretizationRun run = describe_run(*tree, seconds_since(t0));
         run.method = method;  // k = 0 at the coarsest leaf would read as homogeneous
         std::printf("%-11s %5.2f → %4.2f m: %9llu octants, %7.1f MB [%.2f s]\n", method, p.coarse,

@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <utility>
 
@@ -45,6 +46,33 @@ inline Cloud::Ptr synthetic_room(double w = 8.0, double d = 6.0, double h = 3.0,
   // A 1.6 × 0.8 table top at 0.75 m and its sides.
   for (double x = 5.0; x <= 6.6; x += spacing)
     for (double y = 1.0; y <= 1.8; y += spacing) add(x, y, 0.75);
+  return c;
+}
+
+// A scan of an empty w × d room with walls h high and no ceiling, by a scanner at
+// (sx, sy, scanner_height) that steps `step_deg` in azimuth and elevation between
+// elevation_min_deg and +90°: each ray's first hit on the floor or a wall, in the scanner
+// frame. Unlike synthetic_room, its density falls with range as a real scan's does: the
+// walls beside the scanner are dense, the floor beyond the lowest elevation sparse.
+inline Cloud::Ptr scanned_open_room(double w, double d, double h, double sx, double sy,
+                                    double scanner_height, double elevation_min_deg,
+                                    double step_deg) {
+  Cloud::Ptr c(new Cloud);
+  const double to_rad = M_PI / 180.0;
+  for (double el = elevation_min_deg; el <= 90.0; el += step_deg)
+    for (double az = -180.0; az < 180.0; az += step_deg) {
+      const Eigen::Vector3d v(std::cos(el * to_rad) * std::cos(az * to_rad),
+                              std::cos(el * to_rad) * std::sin(az * to_rad), std::sin(el * to_rad));
+      double t = std::numeric_limits<double>::infinity();
+      if (v.z() < 0) t = std::min(t, -scanner_height / v.z());  // the floor
+      if (v.x() > 0) t = std::min(t, (w - sx) / v.x());         // the walls
+      if (v.x() < 0) t = std::min(t, -sx / v.x());
+      if (v.y() > 0) t = std::min(t, (d - sy) / v.y());
+      if (v.y() < 0) t = std::min(t, -sy / v.y());
+      if (!std::isfinite(t) || scanner_height + t * v.z() > h) continue;  // over the walls
+      const Eigen::Vector3d q = t * v;
+      c->push_back(pcl::PointXYZ{float(q.x()), float(q.y()), float(q.z())});
+    }
   return c;
 }
 

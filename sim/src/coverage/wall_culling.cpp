@@ -84,27 +84,36 @@ void wall_offsets(const std::vector<WallSlab>& walls, const Eigen::Vector3d& p, 
   for (std::size_t k = 0; k < walls.size(); ++k) out[k] = walls[k].normal.dot(p - walls[k].origin);
 }
 
-// `opening`: the ends lie strictly beyond the wall's two faces, on opposite sides, and the
-// segment crosses each face within a hole of that wall. `solid`: the ends lie kEndMargin or
-// more beyond the faces and the segment crosses a face kFaceMargin or more inside the
-// face's rectangle and outside every hole, so that the ray caster (float coordinates,
-// first and last millimetre not tested) reports that hit too.
+// `opening`: the segment leaves the wall's slab towards b through holes only: b lies
+// strictly beyond a face, a short of that face (in the room on the other side, or inside
+// the slab: a position standing in a doorway), and every face the segment crosses it
+// crosses within a hole of that wall. An end b inside the slab (a jamb, a sill) is not
+// beyond: the segment enters the hole without leaving it. `solid`: the ends lie
+// kEndMargin or more beyond the faces and the segment crosses a face kFaceMargin or more
+// inside the face's rectangle and outside every hole, so that the ray caster (float
+// coordinates, first and last millimetre not tested) reports that hit too.
 AtWalls at_walls(const std::vector<WallSlab>& walls, const Eigen::Vector3d& a, const double* wa,
                  const Eigen::Vector3d& b, const double* wb, bool find_solid) {
   for (std::size_t k = 0; k < walls.size(); ++k) {
     const WallSlab& w = walls[k];
-    const double lo = std::min(wa[k], wb[k]), hi = std::max(wa[k], wb[k]);
-    if (lo >= -w.half || hi <= w.half || (w.holes.empty() && !find_solid)) continue;
+    const double side = wb[k] > 0 ? 1.0 : -1.0;  // the face on b's side is side · half
+    const bool leaves_towards_b = side * wb[k] > w.half && side * wa[k] < w.half;
+    const bool crosses_both = leaves_towards_b && side * wa[k] < -w.half;
+    const bool test_opening = leaves_towards_b && !w.holes.empty();
+    const bool test_solid = find_solid && crosses_both;
+    if (!test_opening && !test_solid) continue;
     bool in_holes = true, on_solid = false;
-    for (double face : {-w.half, w.half}) {
+    for (double face : {side * w.half, -side * w.half}) {
+      if (face != side * w.half && !crosses_both) break;  // a is inside the slab
       const Eigen::Vector3d q = a + (face - wa[k]) / (wb[k] - wa[k]) * (b - a);
       const double u = w.along.dot(q - w.origin), z = q.z();
       const bool hole = in_hole(w, u, z);
       in_holes = in_holes && hole;
       on_solid = on_solid || (!hole && inside_face(w, u, z));
     }
-    if (in_holes) return AtWalls::opening;
-    if (find_solid && on_solid && lo <= -w.half - kEndMargin && hi >= w.half + kEndMargin)
+    if (test_opening && in_holes) return AtWalls::opening;
+    if (test_solid && on_solid && std::min(wa[k], wb[k]) <= -w.half - kEndMargin &&
+        std::max(wa[k], wb[k]) >= w.half + kEndMargin)
       return AtWalls::solid;
   }
   return AtWalls::nothing_known;

@@ -22,10 +22,12 @@ bool sample_visible_from(const GroundTruth& truth, const SurfaceSample& sample,
 bool sample_in_line_of_sight(const GroundTruth& truth, const SurfaceSample& sample,
                              const Eigen::Vector3d& optical_centre);
 
-// True if the segment a→b passes through a door or window: its ends lie strictly beyond
-// the two faces of a wall, on opposite sides, and it crosses each face within an opening
-// of that wall (1 mm tolerance). A segment with an end inside the hole (on a jamb, the
-// sill or the lintel) or on a face plane does not pass through. No ray query.
+// True if the segment from the position a to the sample b passes through a door or
+// window: b lies strictly beyond a face of a wall, a short of that face (beyond the other
+// face, or inside the wall's slab or on a face plane: standing in a doorway), and each
+// face the segment crosses it crosses within an opening of that wall (1 mm tolerance).
+// A sample inside the hole (on a jamb, the sill or the lintel) or on a face plane is not
+// beyond. No ray query.
 bool segment_through_opening(const Scene& scene, const Eigen::Vector3d& a,
                              const Eigen::Vector3d& b);
 
