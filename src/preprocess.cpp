@@ -80,9 +80,10 @@ enum class FirstPlaneAmong { kReturns, kSurfaces };
 // parallel to it. Their sizes (`inliers`, which the choice of the floor compares) are
 // counted among the returns either way: a floor seen all round the scanner holds more
 // returns than the ground beyond a window, however far that ground stretches.
-std::vector<HorizontalPlane> find_horizontal_planes(const Cloud& input, const PreprocessParams& p,
+// `work`: random_subset(input, p.ransac_sample), drawn once for both searches.
+std::vector<HorizontalPlane> find_horizontal_planes(const Cloud& input, const Cloud::Ptr& work,
+                                                    const PreprocessParams& p,
                                                     FirstPlaneAmong among) {
-  const Cloud::Ptr work = random_subset(input, p.ransac_sample);
   const Cloud::Ptr search =
       among == FirstPlaneAmong::kReturns ? work : area_uniform_subset(input, p);
   if (work->empty() || search->empty()) return {};
@@ -330,7 +331,9 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   // among returns that crowd on the walls beside it: the first plane is then searched
   // again among points spread evenly over the surfaces (area_uniform_subset), and that
   // search decides (docs/data-flow.md).
-  std::vector<HorizontalPlane> planes = find_horizontal_planes(input, p, FirstPlaneAmong::kReturns);
+  const Cloud::Ptr work = random_subset(input, p.ransac_sample);
+  std::vector<HorizontalPlane> planes =
+      find_horizontal_planes(input, work, p, FirstPlaneAmong::kReturns);
   if (planes.empty())
     throw PreprocessError("no horizontal plane found (no floor and no ceiling in the cloud?)");
   Eigen::Vector4f centroid;
@@ -339,7 +342,7 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   FloorAndCeiling fc = choose_floor_and_ceiling(planes, centroid, p);
   if (!fc.ceiling) {
     std::vector<HorizontalPlane> spread =
-        find_horizontal_planes(input, p, FirstPlaneAmong::kSurfaces);
+        find_horizontal_planes(input, work, p, FirstPlaneAmong::kSurfaces);
     if (!spread.empty()) {
       planes = std::move(spread);
       fc = choose_floor_and_ceiling(planes, centroid, p);
