@@ -22,4 +22,4 @@ add_test(NAME install_package
                  -DWITH_SIM=${SEMIOCTREE_INSTALL_TEST_SIM}
                  -DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR}/install_package
                  -P ${CMAKE_CURRENT_SOURCE_DIR}/install_consumer/run.cmake)
-set_tests_properties(install_package PROPERTIES TIMEOUT 600)
+set_tests_properties(install_package PROPERTIES TIMEOUT 600 COST 150)

@@ -24,7 +24,7 @@ if(TARGET semioctree_sim)
 endif()
 # The survey and nbv commands end to end (the survey needs the synthetic scanner).
 if(TARGET semioctree_sim)
-  semioctree_add_test(test_survey SOURCES test_survey.cpp LIBS nlohmann_json::nlohmann_json)
+  semioctree_add_test(test_survey SOURCES test_survey.cpp LIBS nlohmann_json::nlohmann_json COST 120)
   target_include_directories(test_survey PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
   add_dependencies(test_survey semioctree_cli)
 endif()
@@ -62,7 +62,7 @@ if(TARGET semioctree_sim_platform)
     add_test(NAME generated_scenes
              COMMAND eval_generated --kind room --seeds 1-8 --check
                      --cache ${CMAKE_BINARY_DIR}/coverage-cache)
-    set_tests_properties(generated_scenes PROPERTIES LABELS slow TIMEOUT 3600)
+    set_tests_properties(generated_scenes PROPERTIES LABELS slow TIMEOUT 3600 COST 330)
     if(NOT SEMIOCTREE_TEST_GENERATED_SCENES)
       set_tests_properties(generated_scenes PROPERTIES DISABLED TRUE)
     endif()

@@ -21,7 +21,7 @@ endif()
 if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/test_global_registration.cpp)
   if(TARGET semioctree_sim)
     semioctree_add_test(test_global_registration SOURCES test_global_registration.cpp
-                        LIBS semioctree semioctree_sim)
+                        LIBS semioctree semioctree_sim COST 180)
     target_compile_definitions(test_global_registration PRIVATE SEMIOCTREE_HAVE_SIM=1)
   else()
     semioctree_add_test(test_global_registration SOURCES test_global_registration.cpp

@@ -137,10 +137,12 @@ TEST(GlobalRegistration, TooFewWallsIsRefused) {
 
 TEST(GlobalRegistration, LabPairsWithoutPose) {
   // Scans from a 2 m grid over the lab's main room; pairs 2-4 m apart, the source
-  // turned by 30-180°. The sanitizer run (several times slower) takes one pair.
+  // turned by 30-180°. Sanitized (one pair took two minutes there), the real scan's
+  // moved copy stands for it.
+  if (sanitized()) GTEST_SKIP() << "skipped when sanitized (minutes there)";
   const std::vector<testing::LabPosition> positions =
       testing::lab_positions(2.0, testing::kTestStepDeg);
-  const std::vector<testing::LabPair> pairs = testing::lab_pairs(positions, sanitized() ? 1 : 6);
+  const std::vector<testing::LabPair> pairs = testing::lab_pairs(positions, 6);
   ASSERT_FALSE(pairs.empty());
   for (const testing::LabPair& p : pairs) {
     ASSERT_GE(p.distance_m, 2.0);
