@@ -36,8 +36,7 @@ int main(int argc, char** argv) {
     params.preprocess.target_points = 400000;
     params.max_scans = argc > 2 ? std::strtoul(argv[2], nullptr, 10) : 10;
 
-    sim_platform::SimulatedPlatform robot(scene, /*seed=*/1, /*threads=*/0,
-                                          /*keep_points=*/false);
+    sim_platform::SimulatedPlatform robot(scene, /*seed=*/1, /*threads=*/0);
     BestScorePolicy next_best_view;
     PrintEachScan printer;
     Survey survey(params, &printer);

@@ -257,18 +257,21 @@ std::size_t count_cells(const Cloud& cloud, double spacing) {
 
 }  // namespace
 
-Cloud::Ptr decimate(const Cloud& cloud, double spacing) {
+Cloud::Ptr decimate(const Cloud::ConstPtr& cloud, double spacing) {
   Cloud::Ptr out(new Cloud);
   if (spacing <= 0) {
-    *out = cloud;
+    *out = *cloud;
     return out;
   }
-  Cloud::Ptr in(new Cloud(cloud));
   pcl::UniformSampling<pcl::PointXYZ> us;
-  us.setInputCloud(in);
+  us.setInputCloud(cloud);
   us.setRadiusSearch(spacing);
   us.filter(*out);
   return out;
+}
+
+Cloud::Ptr decimate(const Cloud& cloud, double spacing) {
+  return decimate(Cloud::ConstPtr(new Cloud(cloud)), spacing);
 }
 
 namespace {
@@ -362,17 +365,20 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   // Rotate, then find the peaks of the z histogram near the planes' heights.
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = level.toRotationMatrix();
-  Cloud rotated;
-  pcl::transformPointCloud(input, rotated, T.matrix().cast<float>());
-  std::vector<float> z(rotated.size());
-  for (std::size_t i = 0; i < rotated.size(); ++i) z[i] = rotated[i].z;
-  const Eigen::Vector3d on_floor = T * Eigen::Vector3d(c.x(), c.y(), lowest->height_at(c));
-  r.floor = fit_peak(z, on_floor.z(), p);
-  r.floor.plane_inliers = lowest->inliers;
-  if (r.ceiling_found) {
-    const Eigen::Vector3d on_ceiling = T * Eigen::Vector3d(c.x(), c.y(), highest->height_at(c));
-    r.ceiling = fit_peak(z, on_ceiling.z(), p);
-    r.ceiling.plane_inliers = highest->inliers;
+  // The rotated cloud becomes the cut one in place (a scan runs to millions of points).
+  Cloud::Ptr cut(new Cloud);
+  pcl::transformPointCloud(input, *cut, T.matrix().cast<float>());
+  {
+    std::vector<float> z(cut->size());
+    for (std::size_t i = 0; i < cut->size(); ++i) z[i] = (*cut)[i].z;
+    const Eigen::Vector3d on_floor = T * Eigen::Vector3d(c.x(), c.y(), lowest->height_at(c));
+    r.floor = fit_peak(z, on_floor.z(), p);
+    r.floor.plane_inliers = lowest->inliers;
+    if (r.ceiling_found) {
+      const Eigen::Vector3d on_ceiling = T * Eigen::Vector3d(c.x(), c.y(), highest->height_at(c));
+      r.ceiling = fit_peak(z, on_ceiling.z(), p);
+      r.ceiling.plane_inliers = highest->inliers;
+    }
   }
 
   // Floor to z = 0.
@@ -381,19 +387,22 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   if (r.ceiling_found) r.ceiling.center -= r.floor.center;
   r.floor.center = 0;
 
-  Cloud::Ptr cut(new Cloud);
-  cut->reserve(rotated.size());
   const double zf = p.sigma_factor * r.floor.sigma, zc = p.sigma_factor * r.ceiling.sigma;
-  for (const auto& q : rotated) {
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < cut->size(); ++i) {
+    const pcl::PointXYZ& q = (*cut)[i];
     const pcl::PointXYZ v(q.x, q.y, float(double(q.z) + T.translation().z()));
     if (std::fabs(v.z - r.floor.center) <= zf) {
       ++r.floor.removed;
     } else if (r.ceiling_found && std::fabs(v.z - r.ceiling.center) <= zc) {
       ++r.ceiling.removed;
     } else {
-      cut->push_back(v);
+      (*cut)[kept++] = v;
     }
   }
+  cut->resize(kept);
+  cut->header = pcl::PCLHeader();
+  cut->is_dense = true;
   // The room's height: given, the ceiling's, or the top of the points left.
   if (p.ceiling_height > 0) {
     r.ceiling_height = p.ceiling_height;
@@ -447,7 +456,7 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
       if (double(count_cells(*cut, s)) <= target) best = s;
     spacing = best;
   }
-  if (!decimated) decimated = spacing > 0 ? decimate(*cut, spacing) : cut;
+  if (!decimated) decimated = spacing > 0 ? decimate(Cloud::ConstPtr(cut), spacing) : cut;
   r.cloud = decimated;
   r.decimation_spacing = spacing;
   r.output_points = r.cloud->size();

@@ -127,7 +127,7 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
   // Stage 1: drop the returns outside the scanner's limits (its mount, the robot), level
   // this scan in its own frame, then place it by the reported pose.
   auto t0 = Clock::now();
-  const Cloud::Ptr seen = within_limits(*in.points, params_.map.limits, &rec.points_outside_limits);
+  const Cloud::Ptr seen = within_limits(in.points, params_.map.limits, &rec.points_outside_limits);
   const PreprocessResult pre = preprocess(*seen, params_.preprocess);
   rec.points_kept = pre.output_points;
   rec.ceiling_height = pre.ceiling_height;

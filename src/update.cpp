@@ -10,26 +10,32 @@
 
 namespace semioctree {
 
-Cloud::Ptr within_limits(const Cloud& scan, const ScannerView& limits, std::size_t* dropped) {
+Cloud::Ptr within_limits(const Cloud::Ptr& scan, const ScannerView& limits, std::size_t* dropped) {
   // Coordinates are floats: a return on a limit itself (the synthetic
   // scanner's lowest beam row) must survive the rounding.
   constexpr double kRangeTolerance = 1e-4, kElevationTolerance = 1e-3;  // m, degrees
-  Cloud::Ptr out(new Cloud);
-  out->reserve(scan.size());
-  for (const auto& p : scan) {
+  auto within = [&](const pcl::PointXYZ& p) {
     const double x = p.x, y = p.y, z = p.z;
     const double range = std::sqrt(x * x + y * y + z * z);
     if (range < limits.min_range - kRangeTolerance || range > limits.max_range + kRangeTolerance)
-      continue;
+      return false;
     if (range > 0) {
       const double elevation = std::asin(std::clamp(z / range, -1.0, 1.0)) * 180.0 / M_PI;
       if (elevation < limits.elevation_min_deg - kElevationTolerance ||
           elevation > limits.elevation_max_deg + kElevationTolerance)
-        continue;
+        return false;
     }
-    out->push_back(p);
-  }
-  if (dropped) *dropped = scan.size() - out->size();
+    return true;
+  };
+  std::vector<std::uint8_t> keep(scan->size());
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < scan->size(); ++i) kept += keep[i] = within((*scan)[i]);
+  if (dropped) *dropped = scan->size() - kept;
+  if (kept == scan->size()) return scan;
+  Cloud::Ptr out(new Cloud);
+  out->reserve(kept);
+  for (std::size_t i = 0; i < scan->size(); ++i)
+    if (keep[i]) out->push_back((*scan)[i]);
   return out;
 }
 

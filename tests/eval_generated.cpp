@@ -98,7 +98,14 @@ SceneResult evaluate(std::uint64_t seed, sim::GeneratedKind asked, const Options
     planning.threads = o.threads;
     cli::apply_planning_options(planning, p);
     p.max_scans = std::size_t(o.max_scans);
-    sim_platform::SimulatedPlatform platform(scene, seed, o.threads, /*keep_points=*/true);
+    const sim::CoverageReference ref = sim::load_or_compute_coverage_reference(
+        truth, o.cache.empty() ? sim::default_cache_dir() : o.cache, 0.5, 0.02, o.threads);
+    sim::CoverageAccumulator coverage(ref);
+    sim_platform::SimulatedPlatform platform(
+        scene, seed, o.threads,
+        [&coverage](const Cloud& points, const Eigen::Isometry3d& to_world) {
+          sim_platform::add_to_coverage(coverage, points, to_world);
+        });
     BestScorePolicy policy;
     Survey survey(p);
     const SurveyOutcome outcome = survey.run(platform, policy);
@@ -117,9 +124,7 @@ SceneResult evaluate(std::uint64_t seed, sim::GeneratedKind asked, const Options
                               {"feasible", c.feasible}};
     }
 
-    const sim::CoverageReference ref = sim::load_or_compute_coverage_reference(
-        truth, o.cache.empty() ? sim::default_cache_dir() : o.cache, 0.5, 0.02, o.threads);
-    r.coverage = sim::measure_coverage(ref, platform.measured_points()).percent;
+    r.coverage = coverage.count().percent;
     j["coverage_percent"] = r.coverage;
 
     double max_m = 0, max_deg = 0;
@@ -168,7 +173,8 @@ SceneResult evaluate(std::uint64_t seed, sim::GeneratedKind asked, const Options
     j["error"] = e.what();
   }
   j["finished"] = r.finished;
-  j["seconds"] = seconds_since(t0);
+  j["seconds"] = seconds_since(t0);         // the coverage reference included (unless cached)
+  j["peak_rss_mib"] = peak_resident_mib();  // of the process so far (all scenes before too)
   return r;
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <iostream>
 #include <limits>
+#include <stdexcept>
 #include <vector>
 
 #include "semioctree/sim/coverage/measure.h"
@@ -47,6 +48,39 @@ TEST(Coverage, CountsSamplesWithAPointWithinTheTolerance) {
   EXPECT_EQ(covered_samples(ref, as_float, 0.0285),
             (std::vector<bool>{false, true, true, true, false, false}));
   EXPECT_EQ(measure_coverage(CoverageReference{}, measured).percent, 0.0);
+}
+
+TEST(Coverage, TheAccumulatorOfScansEqualsTheCoverageOfAllTheirPoints) {
+  CoverageReference ref;
+  for (int i = 0; i < 40; ++i) ref.points.emplace_back(0.1 * i, 0.0, 1.0);
+  CoverageAccumulator acc(ref);
+  EXPECT_EQ(acc.covered(), std::vector<bool>(40, false));
+  EXPECT_EQ(acc.count().covered, 0u);
+  // Two "scans": the first covers samples 0-19, the second 10-29 (overlapping); a third
+  // point 2 cm off sample 35 and one 4 cm off sample 37.
+  std::vector<Eigen::Vector3f> first, second, all;
+  for (int i = 0; i < 20; ++i) first.emplace_back(0.1f * float(i), 0.01f, 1.0f);
+  for (int i = 10; i < 30; ++i) second.emplace_back(0.1f * float(i), -0.01f, 1.0f);
+  second.emplace_back(3.5f, 0.0f, 1.02f);
+  second.emplace_back(3.7f, 0.0f, 1.04f);
+  acc.add(first);
+  EXPECT_EQ(acc.count().covered, 20u);
+  acc.add(second);
+  all = first;
+  all.insert(all.end(), second.begin(), second.end());
+  EXPECT_EQ(acc.covered(), covered_samples(ref, all));
+  EXPECT_EQ(acc.count().covered, 31u);  // 0-29 and 35
+  EXPECT_FALSE(acc.covered()[37]);
+  // What the second scan alone flags; the accumulated flags stay as they are.
+  std::vector<bool> second_only(40, false);
+  for (int i = 10; i < 30; ++i) second_only[std::size_t(i)] = true;
+  second_only[35] = true;
+  EXPECT_EQ(acc.flags_of(second), second_only);
+  EXPECT_EQ(acc.count().covered, 31u);
+  // A point that is not finite flags nothing.
+  acc.add(Eigen::Vector3d(std::nan(""), 0.0, 1.0));
+  EXPECT_EQ(acc.count().covered, 31u);
+  EXPECT_THROW(CoverageAccumulator(ref, 0.0), std::invalid_argument);
 }
 
 TEST(Coverage, AFullScanOfTheEmptyBoxRoomCoversItsReference) {

@@ -259,6 +259,14 @@ TEST(Survey, WritesEveryOutputWithTheDocumentedSchema) {
   EXPECT_EQ(j["complete"].get<bool>(), why == "stop_percentage");
   ASSERT_GE(j["scans"].size(), 1u);
   ASSERT_LE(j["scans"].size(), 2u);
+  // Peak memory: more than an idle process, never falling, the run's at the end.
+  double peak = 0;
+  for (const json& s : j["scans"]) {
+    ASSERT_TRUE(s.contains("peak_rss_mib"));
+    EXPECT_GE(s["peak_rss_mib"].get<double>(), std::max(10.0, peak));
+    peak = s["peak_rss_mib"].get<double>();
+  }
+  EXPECT_GE(j["peak_rss_mib"].get<double>(), peak);
   for (const json& s : j["scans"]) {
     for (const char* k : {"index", "pose", "true_pose", "points_raw", "points_kept", "octants",
                           "volume_percent", "stop_percent", "nbv", "seconds", "ceiling_found",

@@ -73,7 +73,16 @@ struct WorstScorePolicy : NextScanPolicy {
 
 TEST(SurveyStage, ReportsEveryStageInOrderAndEndsByItsRule) {
   const sim::Scene scene = test_scene();
-  SimulatedPlatform platform(scene, 1, 0, false);
+  // The platform hands each placed scan's points over once, with its estimated pose.
+  struct Placed {
+    std::size_t points;
+    Eigen::Isometry3d to_world;
+  };
+  std::vector<Placed> placed;
+  SimulatedPlatform platform(scene, 1, 0,
+                             [&placed](const Cloud& points, const Eigen::Isometry3d& to_world) {
+                               placed.push_back({points.size(), to_world});
+                             });
   EventLog log;
   Survey survey(params_for(scene, 3, 0.1), &log);
   BestScorePolicy nbv;
@@ -122,11 +131,21 @@ TEST(SurveyStage, ReportsEveryStageInOrderAndEndsByItsRule) {
     EXPECT_NEAR(survey.map().scanners()[i].x, survey.records()[i].scanner().x, 1e-6);
     EXPECT_NEAR(survey.map().scanners()[i].y, survey.records()[i].scanner().y, 1e-6);
   }
+  // One call per scan, all its points, at the true pose up to the estimate's error.
+  ASSERT_EQ(placed.size(), n);
+  ASSERT_EQ(platform.optical_centres().size(), n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const sim_platform::ScanTruth& t = platform.truths()[i];
+    EXPECT_EQ(placed[i].points, t.points);
+    const double off = (placed[i].to_world.translation() - t.scanner_to_world.translation()).norm();
+    EXPECT_NEAR(off, t.pose_error_m, 1e-6);
+    EXPECT_LT(off, 0.05);
+  }
 }
 
 TEST(SurveyStage, SpendsTheBudgetAndDrivesToThePolicysChoice) {
   const sim::Scene scene = test_scene();
-  SimulatedPlatform platform(scene, 2, 0, false);
+  SimulatedPlatform platform(scene, 2, 0);
   Survey survey(params_for(scene, 2, 0.0), nullptr);  // threshold 0: never complete
   WorstScorePolicy worst;
   const SurveyOutcome outcome = survey.run(platform, worst);
@@ -162,7 +181,7 @@ class LyingPlatform : public SimulatedPlatform {
 
 TEST(SurveyStage, AFailedRegistrationEndsTheSurveyAndKeepsTheMapOfTheScansBefore) {
   const sim::Scene scene = test_scene();
-  LyingPlatform platform(scene, 1, 0, false);
+  LyingPlatform platform(scene, 1, 0);
   Survey survey(params_for(scene, 4, 0.0), nullptr);
   BestScorePolicy nbv;
   const SurveyOutcome outcome = survey.run(platform, nbv);
@@ -212,7 +231,7 @@ sim::Scene room_scene(const std::string& name, double wall_height, double ceilin
 // The survey of `scene` with the NBV policy, up to 6 scans: it must end by its stop
 // percentage, every scan levelled by its floor alone. Returns the map's height.
 double expect_complete_without_ceiling(const sim::Scene& scene) {
-  SimulatedPlatform platform(scene, 1, 0, false);
+  SimulatedPlatform platform(scene, 1, 0);
   Survey survey(params_for(scene, 6, 0.1), nullptr);
   BestScorePolicy nbv;
   const SurveyOutcome outcome = survey.run(platform, nbv);

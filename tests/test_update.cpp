@@ -240,7 +240,8 @@ TEST(Update, EachScanKeepsTheDirectionsItGotReturnsIn) {
 TEST(Update, ReturnsOutsideTheScannerLimitsAreDropped) {
   ScannerView v;  // 0.6 to 60 m, -60° to 90°
   const double s60 = std::sin(60 * M_PI / 180), c60 = std::cos(60 * M_PI / 180);
-  Cloud scan;
+  Cloud::Ptr all(new Cloud);
+  Cloud& scan = *all;
   add(scan, 0.05, 0.0, -0.11);        // the mount, 0.12 m away
   add(scan, 0.3, 0.0, -0.8);          // the robot's body, -69°
   add(scan, 3.0, 0.0, -1.2);          // the floor, -22°
@@ -249,13 +250,18 @@ TEST(Update, ReturnsOutsideTheScannerLimitsAreDropped) {
   add(scan, 2 * c60, 0.0, -2 * s60);  // on the lowest elevation: kept
   add(scan, 0.0, 0.6, 0.0);           // at the minimum range: kept
   std::size_t dropped = 0;
-  const Cloud::Ptr kept = within_limits(scan, v, &dropped);
+  const Cloud::Ptr kept = within_limits(all, v, &dropped);
   EXPECT_EQ(dropped, 3u);
   ASSERT_EQ(kept->size(), 4u);
+  EXPECT_NE(kept, all);  // a new cloud; the scan is left as it was
+  EXPECT_EQ(all->size(), 7u);
   EXPECT_FLOAT_EQ((*kept)[0].x, 3.0f);
   EXPECT_FLOAT_EQ((*kept)[1].y, 2.0f);
+  // A scan wholly within the limits is returned as it is, not copied.
+  EXPECT_EQ(within_limits(kept, v, &dropped), kept);
+  EXPECT_EQ(dropped, 0u);
   v.elevation_min_deg = -41;  // a robot whose body reaches -41.4°
-  EXPECT_EQ(within_limits(scan, v)->size(), 3u);
+  EXPECT_EQ(within_limits(all, v)->size(), 3u);
 }
 
 }  // namespace

@@ -84,7 +84,9 @@ class PreprocessError : public std::runtime_error {
 PreprocessResult preprocess(const Cloud& input, const PreprocessParams& params = {});
 
 // Decimates to a minimum spacing (PCL UniformSampling: one original point per
-// cell of that size); exposed for reuse and tests.
+// cell of that size); exposed for reuse and tests. The first form filters the
+// cloud it is given; the second copies it first (PCL filters take shared clouds).
+Cloud::Ptr decimate(const Cloud::ConstPtr& cloud, double spacing);
 Cloud::Ptr decimate(const Cloud& cloud, double spacing);
 
 }  // namespace semioctree

@@ -58,7 +58,8 @@ struct ScanUpdateReport {
 // that clears the robot). The occlusion study takes that space as unseen;
 // mapped, such returns would be occupied leaves in the robot's own cylinder,
 // and their shadows occluded space all around it.
-Cloud::Ptr within_limits(const Cloud& scan, const ScannerView& limits,
+// Returns `scan` itself when every point is within the limits (no copy).
+Cloud::Ptr within_limits(const Cloud::Ptr& scan, const ScannerView& limits,
                          std::size_t* dropped = nullptr);
 
 class SurveyMap {

@@ -36,19 +36,23 @@ namespace {
 
 // Samples at the centres of a grid of about `spacing` over the rectangle
 // origin + [0, len1]·e1 + [0, len2]·e2.
+// The samplers hand each sample to `emit` (a callable taking a SurfaceSample), in an order
+// fixed by the part alone.
+template <class Emit>
 void sample_rect(const Eigen::Vector3d& origin, const Eigen::Vector3d& e1, double len1,
                  const Eigen::Vector3d& e2, double len2, const Eigen::Vector3d& normal,
-                 double spacing, PartRef part, std::vector<SurfaceSample>& out) {
+                 double spacing, PartRef part, Emit& emit) {
   if (len1 <= 0 || len2 <= 0) return;
   const int n1 = std::max(1, static_cast<int>(std::lround(len1 / spacing)));
   const int n2 = std::max(1, static_cast<int>(std::lround(len2 / spacing)));
   for (int i = 0; i < n1; ++i)
     for (int j = 0; j < n2; ++j)
-      out.push_back(
-          {origin + e1 * (len1 * (i + 0.5) / n1) + e2 * (len2 * (j + 0.5) / n2), normal, part});
+      emit(SurfaceSample{origin + e1 * (len1 * (i + 0.5) / n1) + e2 * (len2 * (j + 0.5) / n2),
+                         normal, part});
 }
 
-void sample_wall(const Wall& wall, double spacing, PartRef part, std::vector<SurfaceSample>& out) {
+template <class Emit>
+void sample_wall(const Wall& wall, double spacing, PartRef part, Emit& emit) {
   const WallGrid g = wall_grid(wall);
   const std::size_t nu = g.u.size(), nv = g.v.size();
   const Eigen::Vector2d d2 = wall.direction(), n2 = wall.normal();
@@ -63,26 +67,27 @@ void sample_wall(const Wall& wall, double spacing, PartRef part, std::vector<Sur
     for (std::size_t j = 0; j + 1 < nv; ++j) {
       if (!g.solid[i][j]) continue;
       const double du = g.u[i + 1] - g.u[i], dv = g.v[j + 1] - g.v[j];
-      sample_rect(point(g.u[i], 1, g.v[j]), d, du, z, dv, n, spacing, part, out);
-      sample_rect(point(g.u[i], -1, g.v[j]), d, du, z, dv, -n, spacing, part, out);
+      sample_rect(point(g.u[i], 1, g.v[j]), d, du, z, dv, n, spacing, part, emit);
+      sample_rect(point(g.u[i], -1, g.v[j]), d, du, z, dv, -n, spacing, part, emit);
     }
   for (std::size_t i = 0; i < nu; ++i)
     for (std::size_t j = 0; j + 1 < nv; ++j) {
       const bool before = g.solid_at(static_cast<long>(i) - 1, static_cast<long>(j));
       if (before == g.solid_at(static_cast<long>(i), static_cast<long>(j))) continue;
       sample_rect(point(g.u[i], -1, g.v[j]), n, wall.thickness, z, g.v[j + 1] - g.v[j],
-                  before ? d : -d, spacing, part, out);
+                  before ? d : -d, spacing, part, emit);
     }
   for (std::size_t j = 0; j < nv; ++j)
     for (std::size_t i = 0; i + 1 < nu; ++i) {
       const bool below = g.solid_at(static_cast<long>(i), static_cast<long>(j) - 1);
       if (below == g.solid_at(static_cast<long>(i), static_cast<long>(j))) continue;
       sample_rect(point(g.u[i], -1, g.v[j]), d, g.u[i + 1] - g.u[i], n, wall.thickness,
-                  below ? z : -z, spacing, part, out);
+                  below ? z : -z, spacing, part, emit);
     }
 }
 
-void sample_box(const Box& b, double spacing, PartRef part, std::vector<SurfaceSample>& out) {
+template <class Emit>
+void sample_box(const Box& b, double spacing, PartRef part, Emit& emit) {
   const double yaw = b.yaw_deg * M_PI / 180.0;
   const Eigen::Vector3d axes[3] = {
       {std::cos(yaw), std::sin(yaw), 0}, {-std::sin(yaw), std::cos(yaw), 0}, {0, 0, 1}};
@@ -92,13 +97,13 @@ void sample_box(const Box& b, double spacing, PartRef part, std::vector<SurfaceS
       const Eigen::Vector3d corner = b.center + s * axes[k] * b.size[k] / 2 -
                                      axes[k1] * b.size[k1] / 2 - axes[k2] * b.size[k2] / 2;
       sample_rect(corner, axes[k1], b.size[k1], axes[k2], b.size[k2], s * axes[k], spacing, part,
-                  out);
+                  emit);
     }
   }
 }
 
-void sample_cylinder(const Cylinder& c, double spacing, PartRef part,
-                     std::vector<SurfaceSample>& out) {
+template <class Emit>
+void sample_cylinder(const Cylinder& c, double spacing, PartRef part, Emit& emit) {
   const double h = c.z1 - c.z0;
   const int n_theta = std::max(3, static_cast<int>(std::lround(2 * M_PI * c.radius / spacing)));
   const int n_z = std::max(1, static_cast<int>(std::lround(h / spacing)));
@@ -106,9 +111,9 @@ void sample_cylinder(const Cylinder& c, double spacing, PartRef part,
     const double a = 2 * M_PI * (i + 0.5) / n_theta;
     const Eigen::Vector3d radial(std::cos(a), std::sin(a), 0);
     for (int j = 0; j < n_z; ++j)
-      out.push_back({Eigen::Vector3d(c.center.x(), c.center.y(), c.z0 + h * (j + 0.5) / n_z) +
-                         c.radius * radial,
-                     radial, part});
+      emit(SurfaceSample{Eigen::Vector3d(c.center.x(), c.center.y(), c.z0 + h * (j + 0.5) / n_z) +
+                             c.radius * radial,
+                         radial, part});
   }
   // Caps: rings of equal width, each with points about `spacing` apart.
   const int n_rings = std::max(1, static_cast<int>(std::lround(c.radius / spacing)));
@@ -118,14 +123,14 @@ void sample_cylinder(const Cylinder& c, double spacing, PartRef part,
     for (int i = 0; i < n; ++i) {
       const double a = 2 * M_PI * (i + 0.5) / n;
       const Eigen::Vector2d xy = c.center + r * Eigen::Vector2d(std::cos(a), std::sin(a));
-      out.push_back({{xy.x(), xy.y(), c.z1}, Eigen::Vector3d::UnitZ(), part});
-      out.push_back({{xy.x(), xy.y(), c.z0}, -Eigen::Vector3d::UnitZ(), part});
+      emit(SurfaceSample{{xy.x(), xy.y(), c.z1}, Eigen::Vector3d::UnitZ(), part});
+      emit(SurfaceSample{{xy.x(), xy.y(), c.z0}, -Eigen::Vector3d::UnitZ(), part});
     }
   }
 }
 
-void sample_mesh(const MeshInstance& m, double spacing, PartRef part,
-                 std::vector<SurfaceSample>& out) {
+template <class Emit>
+void sample_mesh(const MeshInstance& m, double spacing, PartRef part, Emit& emit) {
   // Uniform random points, as many per triangle as its area asks for; the fraction left
   // over carries to the next triangle so that small triangles are not all skipped.
   std::mt19937_64 rng(0x5eed0000u + static_cast<unsigned>(part.index));
@@ -143,7 +148,7 @@ void sample_mesh(const MeshInstance& m, double spacing, PartRef part,
     for (; carry >= 1; carry -= 1) {
       double u = uniform(), v = uniform();
       if (u + v > 1) u = 1 - u, v = 1 - v;
-      out.push_back({a + u * (b - a) + v * (c - a), normal, part});
+      emit(SurfaceSample{a + u * (b - a) + v * (c - a), normal, part});
     }
   }
 }
@@ -151,22 +156,35 @@ void sample_mesh(const MeshInstance& m, double spacing, PartRef part,
 }  // namespace
 
 std::vector<SurfaceSample> surface_samples(const Scene& scene, double spacing) {
-  std::vector<SurfaceSample> all;
-  for (std::size_t i = 0; i < scene.walls.size(); ++i)
-    sample_wall(scene.walls[i], spacing, {PartKind::wall, static_cast<int>(i)}, all);
-  for (std::size_t i = 0; i < scene.boxes.size(); ++i)
-    sample_box(scene.boxes[i], spacing, {PartKind::box, static_cast<int>(i)}, all);
-  for (std::size_t i = 0; i < scene.cylinders.size(); ++i)
-    sample_cylinder(scene.cylinders[i], spacing, {PartKind::cylinder, static_cast<int>(i)}, all);
-  for (std::size_t i = 0; i < scene.meshes.size(); ++i)
-    sample_mesh(scene.meshes[i], spacing, {PartKind::mesh, static_cast<int>(i)}, all);
-  // Drop samples buried in another solid: just outside the surface must be free.
+  auto each_sample = [&](auto& emit) {
+    for (std::size_t i = 0; i < scene.walls.size(); ++i)
+      sample_wall(scene.walls[i], spacing, {PartKind::wall, static_cast<int>(i)}, emit);
+    for (std::size_t i = 0; i < scene.boxes.size(); ++i)
+      sample_box(scene.boxes[i], spacing, {PartKind::box, static_cast<int>(i)}, emit);
+    for (std::size_t i = 0; i < scene.cylinders.size(); ++i)
+      sample_cylinder(scene.cylinders[i], spacing, {PartKind::cylinder, static_cast<int>(i)}, emit);
+    for (std::size_t i = 0; i < scene.meshes.size(); ++i)
+      sample_mesh(scene.meshes[i], spacing, {PartKind::mesh, static_cast<int>(i)}, emit);
+  };
+  // Samples buried in another solid are dropped: just outside the surface must be free.
+  // Two passes over the same samples, the first to judge and count them, so that the
+  // result is allocated once at its size (a scene's samples run to hundreds of MB).
   const SolidModel solids(scene);
   const double offset = std::min(0.005, spacing / 4);
+  std::vector<bool> exposed;
+  std::size_t kept = 0;
+  auto judge = [&](const SurfaceSample& s) {
+    exposed.push_back(!solids.contains(s.position + offset * s.normal, 0.0, false));
+    kept += exposed.back();
+  };
+  each_sample(judge);
   std::vector<SurfaceSample> out;
-  out.reserve(all.size());
-  for (const SurfaceSample& s : all)
-    if (!solids.contains(s.position + offset * s.normal, 0.0, false)) out.push_back(s);
+  out.reserve(kept);
+  std::size_t next = 0;
+  auto keep_exposed = [&](const SurfaceSample& s) {
+    if (exposed[next++]) out.push_back(s);
+  };
+  each_sample(keep_exposed);
   return out;
 }
 

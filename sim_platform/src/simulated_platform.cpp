@@ -31,31 +31,37 @@ void apply_scene(const sim::Scene& scene, SurveyParams& params) {
 }
 
 SimulatedPlatform::SimulatedPlatform(const sim::Scene& scene, std::uint64_t seed, unsigned threads,
-                                     bool keep_points)
+                                     PlacedPoints on_placed)
     : scene_(scene),
       seed_(seed),
       threads_(threads),
-      keep_points_(keep_points),
+      on_placed_(std::move(on_placed)),
       caster_(sim::make_ray_caster(sim::tessellate(scene))),
       robot_(scene.robot, seed) {}
 
 IncomingScan SimulatedPlatform::scan() {
-  if (last_) throw std::logic_error("SimulatedPlatform: the last scan was not placed");
+  if (last_points_) throw std::logic_error("SimulatedPlatform: the last scan was not placed");
   const std::size_t i = truths_.size();
   const auto t0 = Clock::now();
-  last_ = scan_at(*this, robot_.true_pose(), seed_ * 1000 + std::uint64_t(i));
+  IncomingScan in;
+  Eigen::Vector3d origin;
+  {
+    const sim::Scan s = scan_at(*this, robot_.true_pose(), seed_ * 1000 + std::uint64_t(i));
+    last_sensor_to_world_ = s.sensor_to_world();
+    origin = s.origin();
+    auto cloud = std::make_shared<Cloud>();
+    cloud->reserve(s.points.size());
+    for (const Eigen::Vector3f& q : s.points) cloud->push_back({q.x(), q.y(), q.z()});
+    in.points = cloud;
+    last_points_ = cloud;
+  }
   ScanTruth truth;
   truth.scan_seconds = seconds_since(t0);
   truth.true_pose = robot_.true_pose();
   truth.reported_pose = robot_.reported_pose();
-  truth.scanner_to_world = last_->sensor_to_world();
-  truth.points = last_->points.size();
-
-  IncomingScan in;
-  in.points.reset(new Cloud);
-  in.points->reserve(last_->points.size());
-  for (const Eigen::Vector3f& q : last_->points) in.points->push_back({q.x(), q.y(), q.z()});
-  in.points_raw = last_->points.size();
+  truth.scanner_to_world = last_sensor_to_world_;
+  truth.points = last_points_->size();
+  in.points_raw = last_points_->size();
   const sim::Pose2& reported = truth.reported_pose;
   if (i == 0) {
     in.x = reported.x;
@@ -73,7 +79,7 @@ IncomingScan SimulatedPlatform::scan() {
     const double d = robot_.distance_driven() - previous_distance_;
     in.max_correction_m = 0.1 + 5 * scene_.robot.odometry_sigma_xy * d;
     in.max_correction_deg = 1.0 + 5 * scene_.robot.odometry_sigma_yaw_deg * d;
-    const Eigen::Vector3d g(in.x, in.y, 0), t = survey_to_world_.inverse() * last_->origin();
+    const Eigen::Vector3d g(in.x, in.y, 0), t = survey_to_world_.inverse() * origin;
     truth.guess_error_m = (g - t).head<2>().norm();
   }
   truths_.push_back(truth);
@@ -81,7 +87,7 @@ IncomingScan SimulatedPlatform::scan() {
 }
 
 void SimulatedPlatform::placed(const Eigen::Isometry3d& scanner_to_survey) {
-  if (!last_) throw std::logic_error("SimulatedPlatform: no scan to place");
+  if (!last_points_) throw std::logic_error("SimulatedPlatform: no scan to place");
   ScanTruth& truth = truths_.back();
   previous_reported_ = truth.reported_pose;
   previous_distance_ = robot_.distance_driven();
@@ -95,12 +101,9 @@ void SimulatedPlatform::placed(const Eigen::Isometry3d& scanner_to_survey) {
   truth.pose_error_m = (estimated_world.translation() - true_pose.translation()).norm();
   truth.pose_error_deg =
       std::abs(std::remainder(yaw_deg_of(estimated_world) - yaw_deg_of(true_pose), 360.0));
-  if (keep_points_) {
-    const Eigen::Affine3f to_world = estimated_world.cast<float>();
-    for (const Eigen::Vector3f& q : last_->points) measured_.push_back(to_world * q);
-    optical_centres_.push_back(true_pose.translation());
-  }
-  last_.reset();
+  optical_centres_.push_back(true_pose.translation());
+  if (on_placed_) on_placed_(*last_points_, estimated_world);
+  last_points_.reset();
 }
 
 void SimulatedPlatform::move_to(const Point3& target) {
@@ -108,15 +111,21 @@ void SimulatedPlatform::move_to(const Point3& target) {
   robot_.move_to({w.x(), w.y(), robot_.true_pose().yaw_deg});
 }
 
+void add_to_coverage(sim::CoverageAccumulator& coverage, const Cloud& points,
+                     const Eigen::Isometry3d& scanner_to_world) {
+  for (const pcl::PointXYZ& p : points)
+    coverage.add(scanner_to_world * p.getVector3fMap().cast<double>());
+}
+
 OraclePolicy::OraclePolicy(const SimulatedPlatform& platform,
-                           const sim::CoverageReference& reference, std::uint64_t seed,
+                           const sim::CoverageAccumulator& covered, std::uint64_t seed,
                            std::function<void(std::size_t, std::size_t)> progress)
-    : platform_(platform), reference_(reference), seed_(seed), progress_(std::move(progress)) {}
+    : platform_(platform), covered_(covered), seed_(seed), progress_(std::move(progress)) {}
 
 NextScanChoice OraclePolicy::choose(const ScanRecord& scan, const SurveyMap&) {
   const std::vector<NbvCandidate>& candidates = scan.nbv.candidates;
   if (candidates.empty()) throw std::logic_error("OraclePolicy: no candidate to choose from");
-  const std::vector<bool> have = sim::covered_samples(reference_, platform_.measured_points());
+  const std::vector<bool>& have = covered_.covered();
   const double yaw_deg = platform_.robot().true_pose().yaw_deg;
   NextScanChoice best;
   std::size_t best_gain = 0;
@@ -128,7 +137,7 @@ NextScanChoice OraclePolicy::choose(const ScanRecord& scan, const SurveyMap&) {
     std::vector<Eigen::Vector3f> points;
     points.reserve(s.points.size());
     for (const Eigen::Vector3f& q : s.points) points.push_back(to_world * q);
-    const std::vector<bool> got = sim::covered_samples(reference_, points);
+    const std::vector<bool> got = covered_.flags_of(points);
     std::size_t gain = 0;
     for (std::size_t k = 0; k < got.size(); ++k) gain += got[k] && !have[k];
     if (c == 0 || gain > best_gain) best_gain = gain, best.position = p;

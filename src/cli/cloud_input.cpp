@@ -18,7 +18,7 @@ namespace semioctree::cli {
 
 void check_scan_usable(const Scan& scan, const ScannerView* limits) {
   std::size_t outside = 0;
-  const Cloud::Ptr kept = limits ? within_limits(*scan.points, *limits, &outside) : scan.points;
+  const Cloud::Ptr kept = limits ? within_limits(scan.points, *limits, &outside) : scan.points;
   if (kept->empty()) {
     char range[160];
     std::snprintf(range, sizeof range,
@@ -59,7 +59,7 @@ PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& param
         s.pose = read_pose_json(in.pose_file);
       check_scan_usable(s, limits);
       std::size_t outside = 0;
-      if (limits) s.points = within_limits(*s.points, *limits, &outside);
+      if (limits) s.points = within_limits(s.points, *limits, &outside);
       out.outside_limits += outside;
       const Cloud::Ptr world = to_survey_frame(s);
       merged += *world;

@@ -101,7 +101,7 @@ void run_nbv(const NbvOptions& o) {
         p.robot.scanner_height = o.scanner_height;
       } else {
         const PreprocessResult pre =
-            preprocess(*within_limits(*s.points, p.map.limits), p.preprocess);
+            preprocess(*within_limits(s.points, p.map.limits), p.preprocess);
         p.robot.scanner_height = pre.transform.translation().z();
         std::printf("  scanner height above the floor: %.2f m\n", p.robot.scanner_height);
       }

@@ -71,17 +71,38 @@ struct SurveyOptions {
 // survey.json lists the scene elements with the most missed samples, not all of them.
 constexpr std::size_t kMissedPartsListed = 8;
 
+// The scene's surface covered by the survey as it goes: each placed scan's points flag the
+// reference samples near them (survey.json's coverage), and are not kept.
+class SurveyCoverage {
+ public:
+  SurveyCoverage(const sim::GroundTruth& truth, const std::string& cache_dir)
+      : reference_(sim::load_or_compute_coverage_reference(truth, cache_dir)),
+        accumulator_(reference_) {}
+
+  // SimulatedPlatform's PlacedPoints.
+  void add(const Cloud& points, const Eigen::Isometry3d& scanner_to_world) {
+    const auto t0 = Clock::now();
+    sim_platform::add_to_coverage(accumulator_, points, scanner_to_world);
+    last_seconds_ = seconds_since(t0);
+  }
+
+  const sim::CoverageAccumulator& accumulator() const { return accumulator_; }
+  double last_seconds() const { return last_seconds_; }  // of the last add
+
+ private:
+  sim::CoverageReference reference_;
+  sim::CoverageAccumulator accumulator_;
+  double last_seconds_ = 0;
+};
+
 // Prints what the simulation knows beside the survey's own output (true poses, pose
-// errors, moves, and the surface covered so far when `coverage_reference` is given) and
-// adds it to the scans' records.
+// errors, moves, and the surface covered so far when `coverage` is given) and adds it to
+// the scans' records.
 class SimulatedSurveyOutput : public SurveyOutput {
  public:
   SimulatedSurveyOutput(std::string dir, const SurveyParams& params,
-                        const SimulatedPlatform& platform,
-                        std::function<const sim::CoverageReference&()> coverage_reference)
-      : SurveyOutput(std::move(dir), params),
-        platform_(platform),
-        coverage_reference_(std::move(coverage_reference)) {}
+                        const SimulatedPlatform& platform, const SurveyCoverage* coverage)
+      : SurveyOutput(std::move(dir), params), platform_(platform), coverage_(coverage) {}
 
   void scan_taken(std::size_t index, const IncomingScan&) override {
     const ScanTruth& t = platform_.truths().at(index);
@@ -104,22 +125,11 @@ class SimulatedSurveyOutput : public SurveyOutput {
     if (scan.index > 0)
       std::printf("  pose error after registration: %.1f mm, %.3f°\n", 1000 * t.pose_error_m,
                   t.pose_error_deg);
-    if (coverage_reference_) {
-      // A sample is covered when any point lies near it: the flags of this scan's new points
-      // join those of the scans before.
-      const auto t0 = Clock::now();
-      const std::vector<Eigen::Vector3f>& all = platform_.measured_points();
-      const std::vector<Eigen::Vector3f> added(all.begin() + std::ptrdiff_t(points_counted_),
-                                               all.end());
-      points_counted_ = all.size();
-      const std::vector<bool> now = sim::covered_samples(coverage_reference_(), added);
-      covered_.resize(now.size(), false);
-      for (std::size_t i = 0; i < now.size(); ++i)
-        if (now[i]) covered_[i] = true;
-      const sim::Coverage c = sim::count_covered(covered_);
-      rec["coverage_percent"] = c.percent;
-      std::printf("  coverage so far: %.2f %% of the reference surface [%.2f s]\n", c.percent,
-                  seconds_since(t0));
+    if (coverage_) {  // the platform added this scan's points when it was placed
+      const double percent = coverage_->accumulator().count().percent;
+      rec["coverage_percent"] = percent;
+      std::printf("  coverage so far: %.2f %% of the reference surface [%.2f s]\n", percent,
+                  coverage_->last_seconds());
     }
     std::fflush(stdout);
   }
@@ -139,19 +149,19 @@ class SimulatedSurveyOutput : public SurveyOutput {
 
  private:
   const SimulatedPlatform& platform_;
-  std::function<const sim::CoverageReference&()> coverage_reference_;  // empty: no coverage
-  std::vector<bool> covered_;       // reference samples covered by the scans so far
-  std::size_t points_counted_ = 0;  // of platform_.measured_points(), in covered_
+  const SurveyCoverage* coverage_;  // null: no coverage measured
 };
 
 // survey.json's "coverage" of the scene's surfaces by the survey's registered points,
 // and coverage_missed.ply.
-nlohmann::json coverage_summary(const sim::GroundTruth& truth, const sim::CoverageReference& ref,
+nlohmann::json coverage_summary(const sim::GroundTruth& truth,
+                                const sim::CoverageAccumulator& coverage,
                                 const SimulatedPlatform& platform, const std::string& out_dir,
                                 unsigned threads) {
   const auto t0 = Clock::now();
-  const std::vector<bool> covered = sim::covered_samples(ref, platform.measured_points());
-  const sim::Coverage c = sim::count_covered(covered);
+  const sim::CoverageReference& ref = coverage.reference();
+  const std::vector<bool>& covered = coverage.covered();
+  const sim::Coverage c = coverage.count();
   const sim::MissedSamples missed =
       sim::explain_missed_samples(truth, ref, covered, platform.optical_centres(), threads);
   auto percent_of = [&](std::size_t n) {
@@ -256,15 +266,17 @@ void run_survey(const SurveyOptions& o) {
 
   const std::string cache = o.cache.empty() ? sim::default_cache_dir() : o.cache;
   remove_stale_temporaries(cache);  // the simulator's cache writer leaves them when killed
-  std::optional<sim::CoverageReference> reference;  // loaded once, when first needed
-  auto coverage_reference = [&]() -> const sim::CoverageReference& {
-    if (!reference) reference = sim::load_or_compute_coverage_reference(truth, cache);
-    return *reference;
-  };
-  SimulatedPlatform platform(scene, o.seed, o.plan.threads, !o.skip_coverage);
-  SimulatedSurveyOutput output(
-      o.out, p, platform,
-      o.skip_coverage ? std::function<const sim::CoverageReference&()>() : coverage_reference);
+  // The reference is read or computed before the first scan, while nothing else is held.
+  std::unique_ptr<SurveyCoverage> coverage;
+  SimulatedPlatform::PlacedPoints count_coverage;
+  if (!o.skip_coverage) {
+    coverage = std::make_unique<SurveyCoverage>(truth, cache);
+    count_coverage = [&coverage](const Cloud& points, const Eigen::Isometry3d& to_world) {
+      coverage->add(points, to_world);
+    };
+  }
+  SimulatedPlatform platform(scene, o.seed, o.plan.threads, count_coverage);
+  SimulatedSurveyOutput output(o.out, p, platform, coverage.get());
   Survey survey(p, &output);
   std::unique_ptr<NextScanPolicy> policy;
   if (o.policy == "random") {
@@ -272,7 +284,7 @@ void run_survey(const SurveyOptions& o) {
   } else if (o.policy == "oracle") {
     const auto t_oracle = Clock::now();
     policy = std::make_unique<OraclePolicy>(
-        platform, coverage_reference(), o.seed * 1000 + 999,
+        platform, coverage->accumulator(), o.seed * 1000 + 999,
         [t_oracle](std::size_t done, std::size_t total) {
           std::printf("  oracle: scanned %zu of %zu candidates [%.1f s]\n", done, total,
                       seconds_since(t_oracle));
@@ -313,9 +325,9 @@ void run_survey(const SurveyOptions& o) {
   extra["homogeneous"] = o.homogeneous;
   extra["policy"] = o.policy;
   extra["distance_driven_m"] = platform.robot().distance_driven();
-  if (!o.skip_coverage)
+  if (coverage)
     extra["coverage"] =
-        coverage_summary(truth, coverage_reference(), platform, o.out, o.plan.threads);
+        coverage_summary(truth, coverage->accumulator(), platform, o.out, o.plan.threads);
   extra["seconds_total"] = seconds_since(t_start);
   output.write_survey_json(stopped_because, extra, &survey.map());
   std::printf("survey: %zu scans, stopped because %s; wrote %s/survey.json [%.1f s]\n",

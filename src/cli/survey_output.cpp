@@ -251,6 +251,7 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
                   {"nbv", s.seconds.nbv},
                   {"write", write_seconds},
                   {"total", s.seconds.total + write_seconds}};
+  r["peak_rss_mib"] = peak_resident_mib();  // of the whole run so far
   if (records_.size() <= s.index) records_.resize(s.index + 1);
   records_[s.index] = r;
 }
@@ -285,7 +286,8 @@ void SurveyOutput::write_survey_json(const std::string& stopped_because, const j
             // occluded space that the NBV (if any) would still reveal.
             {"complete", stopped_because == "stop_percentage"},
             {"scans", records_},
-            {"openings", openings}};
+            {"openings", openings},
+            {"peak_rss_mib", peak_resident_mib()}};
   for (const auto& [k, v] : extra.items()) j[k] = v;
   std::filesystem::create_directories(dir_);
   write_file_atomically((std::filesystem::path(dir_) / "survey.json").string(),

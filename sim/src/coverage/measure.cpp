@@ -1,42 +1,12 @@
 // Survey coverage: the reference samples with a measured point nearby.
 #include "semioctree/sim/coverage/measure.h"
 
-#include <algorithm>
-#include <cstdint>
 #include <limits>
 #include <stdexcept>
-#include <utility>
 
 #include "coverage/spatial_hash.h"
 
 namespace semioctree::sim {
-
-namespace {
-
-std::vector<bool> flags(const CoverageReference& reference, std::vector<Eigen::Vector3d> points,
-                        double tolerance) {
-  if (!(tolerance > 0)) throw std::invalid_argument("measure_coverage: tolerance must be > 0");
-  points.erase(std::remove_if(points.begin(), points.end(),
-                              [](const Eigen::Vector3d& p) { return !p.allFinite(); }),
-               points.end());
-  if (points.size() > std::numeric_limits<std::uint32_t>::max())
-    throw std::invalid_argument("measure_coverage: too many points");
-  std::vector<bool> out(reference.points.size(), false);
-  if (points.empty()) return out;
-  const detail::PointHash hash(std::move(points), tolerance);
-  for (std::size_t i = 0; i < reference.points.size(); ++i)
-    out[i] = hash.any_within(reference.points[i], tolerance);
-  return out;
-}
-
-std::vector<Eigen::Vector3d> to_double(const std::vector<Eigen::Vector3f>& points) {
-  std::vector<Eigen::Vector3d> out;
-  out.reserve(points.size());
-  for (const auto& p : points) out.push_back(p.cast<double>());
-  return out;
-}
-
-}  // namespace
 
 Coverage count_covered(const std::vector<bool>& covered) {
   Coverage c;
@@ -48,22 +18,54 @@ Coverage count_covered(const std::vector<bool>& covered) {
   return c;
 }
 
+CoverageAccumulator::CoverageAccumulator(const CoverageReference& reference, double tolerance)
+    : reference_(reference), tolerance_(tolerance), covered_(reference.points.size(), false) {
+  if (!(tolerance > 0)) throw std::invalid_argument("measure_coverage: tolerance must be > 0");
+  if (reference.points.size() > std::numeric_limits<std::uint32_t>::max())
+    throw std::invalid_argument("measure_coverage: too many reference samples");
+  samples_ = std::make_unique<detail::PointHash>(reference.points, 2 * tolerance);
+}
+
+CoverageAccumulator::~CoverageAccumulator() = default;
+CoverageAccumulator::CoverageAccumulator(CoverageAccumulator&&) noexcept = default;
+
+void CoverageAccumulator::add(const Eigen::Vector3d& point_world) {
+  if (!point_world.allFinite()) return;
+  samples_->for_each_within(point_world, tolerance_, [&](std::uint32_t i) { covered_[i] = true; });
+}
+
+void CoverageAccumulator::add(const std::vector<Eigen::Vector3f>& points_world) {
+  for (const Eigen::Vector3f& p : points_world) add(p.cast<double>());
+}
+
+std::vector<bool> CoverageAccumulator::flags_of(
+    const std::vector<Eigen::Vector3f>& points_world) const {
+  std::vector<bool> out(covered_.size(), false);
+  for (const Eigen::Vector3f& p : points_world)
+    if (p.allFinite())
+      samples_->for_each_within(p.cast<double>(), tolerance_,
+                                [&](std::uint32_t i) { out[i] = true; });
+  return out;
+}
+
 Coverage measure_coverage(const CoverageReference& reference,
                           const std::vector<Eigen::Vector3d>& measured_points_world,
                           double tolerance) {
-  return count_covered(flags(reference, measured_points_world, tolerance));
+  CoverageAccumulator acc(reference, tolerance);
+  for (const Eigen::Vector3d& p : measured_points_world) acc.add(p);
+  return acc.count();
 }
 
 Coverage measure_coverage(const CoverageReference& reference,
                           const std::vector<Eigen::Vector3f>& measured_points_world,
                           double tolerance) {
-  return count_covered(flags(reference, to_double(measured_points_world), tolerance));
+  return count_covered(covered_samples(reference, measured_points_world, tolerance));
 }
 
 std::vector<bool> covered_samples(const CoverageReference& reference,
                                   const std::vector<Eigen::Vector3f>& measured_points_world,
                                   double tolerance) {
-  return flags(reference, to_double(measured_points_world), tolerance);
+  return CoverageAccumulator(reference, tolerance).flags_of(measured_points_world);
 }
 
 }  // namespace semioctree::sim

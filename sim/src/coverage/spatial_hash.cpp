@@ -6,8 +6,6 @@
 #include <cstddef>
 #include <utility>
 
-#include "grid_cell_key.h"
-
 namespace semioctree::sim::detail {
 
 namespace {
@@ -30,7 +28,11 @@ PointHash::PointHash(std::vector<Eigen::Vector3d> points, double cell) : cell_(c
     keyed.emplace_back(cell_key(points[i]), static_cast<std::uint32_t>(i));
   std::sort(keyed.begin(), keyed.end());
   points_.reserve(points.size());
-  for (const auto& k : keyed) points_.push_back(points[k.second]);
+  original_.reserve(points.size());
+  for (const auto& k : keyed) {
+    points_.push_back(points[k.second]);
+    original_.push_back(k.second);
+  }
   std::size_t capacity = 16;
   std::size_t cells = 0;
   for (std::size_t i = 0; i < keyed.size(); ++i)
@@ -45,25 +47,6 @@ PointHash::PointHash(std::vector<Eigen::Vector3d> points, double cell) : cell_(c
     slots_[h] = {keyed[i].first, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j - i)};
     i = j;
   }
-}
-
-bool PointHash::any_within(const Eigen::Vector3d& q, double radius) const {
-  if (slots_.empty()) return false;
-  const double r2 = radius * radius;
-  const long ix = index(q.x()), iy = index(q.y()), iz = index(q.z());
-  // Own cell first: it holds the match in most cases.
-  for (int pass = 0; pass < 2; ++pass)
-    for (long dz = -1; dz <= 1; ++dz)
-      for (long dy = -1; dy <= 1; ++dy)
-        for (long dx = -1; dx <= 1; ++dx) {
-          const bool own = dx == 0 && dy == 0 && dz == 0;
-          if (own != (pass == 0)) continue;
-          const Slot* s = find(grid_cell_key(ix + dx, iy + dy, iz + dz));
-          if (!s) continue;
-          for (std::uint32_t k = s->begin; k < s->begin + s->count; ++k)
-            if ((points_[k] - q).squaredNorm() <= r2) return true;
-        }
-  return false;
 }
 
 long PointHash::index(double v) const {

@@ -1,9 +1,12 @@
-// Points hashed by cubic cell, for "is any point within r of q" queries (internal).
+// Points hashed by cubic cell, for "which points lie within r of q" queries (internal).
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <cstdint>
 #include <vector>
+
+#include "grid_cell_key.h"
 
 namespace semioctree::sim::detail {
 
@@ -13,8 +16,29 @@ class PointHash {
  public:
   PointHash(std::vector<Eigen::Vector3d> points, double cell);
 
-  // True if a point lies within `radius` (at most the cell size) of q.
-  bool any_within(const Eigen::Vector3d& q, double radius) const;
+  // Calls f(i) for each point within `radius` (at most half the cell size) of q, i its
+  // index in the vector given to the constructor. Such a ball meets at most the 2 × 2 × 2
+  // cells nearest q: its own and, on each axis, the neighbour on the nearer side.
+  template <class F>
+  void for_each_within(const Eigen::Vector3d& q, double radius, F&& f) const {
+    if (slots_.empty()) return;
+    const double r2 = radius * radius;
+    long lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      const double u = q[a] / cell_;
+      const long i = static_cast<long>(std::floor(u));
+      lo[a] = u - double(i) < 0.5 ? i - 1 : i;
+      hi[a] = lo[a] + 1;
+    }
+    for (long z = lo[2]; z <= hi[2]; ++z)
+      for (long y = lo[1]; y <= hi[1]; ++y)
+        for (long x = lo[0]; x <= hi[0]; ++x) {
+          const Slot* s = find(grid_cell_key(x, y, z));
+          if (!s) continue;
+          for (std::uint32_t k = s->begin; k < s->begin + s->count; ++k)
+            if ((points_[k] - q).squaredNorm() <= r2) f(original_[k]);
+        }
+  }
 
  private:
   struct Slot {
@@ -28,6 +52,7 @@ class PointHash {
 
   double cell_;
   std::vector<Eigen::Vector3d> points_;  // ordered by cell key
+  std::vector<std::uint32_t> original_;  // per entry of points_: its index as given
   std::vector<Slot> slots_;
 };
 

@@ -36,11 +36,16 @@ struct ScanTruth {
 
 class SimulatedPlatform : public ScanPlatform {
  public:
+  // Each placed scan's points (scanner frame) and the survey's estimate of its pose carried
+  // into the world frame: what a coverage measure counts. Called from placed(); the points
+  // are not kept after.
+  using PlacedPoints =
+      std::function<void(const Cloud& points, const Eigen::Isometry3d& scanner_to_world)>;
+
   // Scans `scene` with its scanner from its robot's start. `seed`: scanner noise
-  // (seed·1000 + scan index) and odometry drift; `keep_points`: keep every scan's points
-  // (world frame, as registered) for measuring coverage.
+  // (seed·1000 + scan index) and odometry drift; `on_placed` (may be empty): see above.
   SimulatedPlatform(const sim::Scene& scene, std::uint64_t seed, unsigned threads,
-                    bool keep_points);
+                    PlacedPoints on_placed = {});
 
   // The scan at the robot's true pose; its reported pose is the survey's estimate of the
   // scan before moved by the odometry of the leg since (odometry drifts: only its
@@ -56,41 +61,47 @@ class SimulatedPlatform : public ScanPlatform {
   unsigned threads() const { return threads_; }
   // Survey frame → world: the first scan's estimate against its true pose.
   const Eigen::Isometry3d& survey_to_world() const { return survey_to_world_; }
-  // keep_points: every placed scan's points, world frame through its estimated pose.
-  const std::vector<Eigen::Vector3f>& measured_points() const { return measured_; }
+  // The true optical centre of every placed scan.
   const std::vector<Eigen::Vector3d>& optical_centres() const { return optical_centres_; }
 
  private:
   const sim::Scene& scene_;
   std::uint64_t seed_;
   unsigned threads_;
-  bool keep_points_;
+  PlacedPoints on_placed_;
   std::unique_ptr<sim::RayCaster> caster_;
   sim::Robot robot_;
   std::vector<ScanTruth> truths_;
-  std::optional<sim::Scan> last_;  // taken, not placed yet
+  // The scan taken and not placed yet: its points are those handed to the survey (one copy).
+  std::shared_ptr<const Cloud> last_points_;
+  Eigen::Isometry3d last_sensor_to_world_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d survey_to_world_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d previous_estimate_ = Eigen::Isometry3d::Identity();
   sim::Pose2 previous_reported_;
   double previous_distance_ = 0;
-  std::vector<Eigen::Vector3f> measured_;
   std::vector<Eigen::Vector3d> optical_centres_;
 };
 
+// Flags the reference samples that a placed scan's points cover: the body of a
+// PlacedPoints that measures coverage.
+void add_to_coverage(sim::CoverageAccumulator& coverage, const Cloud& points,
+                     const Eigen::Isometry3d& scanner_to_world);
+
 // The yardstick: scans every feasible candidate in the simulator and takes the one whose
 // points cover the most reference samples not covered yet (greedy, perfect knowledge,
-// among the planner's own candidates). Needs a platform that keeps its points.
+// among the planner's own candidates). `covered`: what the platform's placed scans have
+// covered so far (fed by its PlacedPoints).
 class OraclePolicy : public NextScanPolicy {
  public:
   // `progress(scanned, candidates)` now and then, from the survey's thread.
-  OraclePolicy(const SimulatedPlatform& platform, const sim::CoverageReference& reference,
+  OraclePolicy(const SimulatedPlatform& platform, const sim::CoverageAccumulator& covered,
                std::uint64_t seed, std::function<void(std::size_t, std::size_t)> progress = {});
   NextScanChoice choose(const ScanRecord& scan, const SurveyMap& map) override;
   const char* what() const override { return "oracle's choice"; }
 
  private:
   const SimulatedPlatform& platform_;
-  const sim::CoverageReference& reference_;
+  const sim::CoverageAccumulator& covered_;
   std::uint64_t seed_;
   std::function<void(std::size_t, std::size_t)> progress_;
 };

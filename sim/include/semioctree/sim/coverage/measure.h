@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "semioctree/sim/coverage/reference.h"
@@ -32,5 +33,40 @@ Coverage count_covered(const std::vector<bool>& covered);
 std::vector<bool> covered_samples(const CoverageReference& reference,
                                   const std::vector<Eigen::Vector3f>& measured_points_world,
                                   double tolerance = 0.03);
+
+namespace detail {
+class PointHash;
+}
+
+// The samples a survey's scans have covered so far, one flag per reference sample. The
+// reference's samples are hashed once; each measured point then flags the samples near it
+// and need not be kept (a survey of 5 scans of 5.4 million points would otherwise hold
+// them all to count them at the end).
+class CoverageAccumulator {
+ public:
+  // Throws std::invalid_argument unless tolerance > 0. `reference` must outlive this.
+  explicit CoverageAccumulator(const CoverageReference& reference, double tolerance = 0.03);
+  ~CoverageAccumulator();
+  CoverageAccumulator(CoverageAccumulator&&) noexcept;
+  CoverageAccumulator& operator=(CoverageAccumulator&&) = delete;
+
+  // Flags the samples within the tolerance of a measured point (world frame); a point
+  // that is not finite is ignored.
+  void add(const Eigen::Vector3d& point_world);
+  void add(const std::vector<Eigen::Vector3f>& points_world);
+
+  // The flags these points alone set (what add would flag), the accumulated ones untouched.
+  std::vector<bool> flags_of(const std::vector<Eigen::Vector3f>& points_world) const;
+
+  const std::vector<bool>& covered() const { return covered_; }
+  Coverage count() const { return count_covered(covered_); }
+  const CoverageReference& reference() const { return reference_; }
+
+ private:
+  const CoverageReference& reference_;
+  double tolerance_;
+  std::unique_ptr<detail::PointHash> samples_;  // the reference's points
+  std::vector<bool> covered_;
+};
 
 }  // namespace semioctree::sim
