@@ -117,11 +117,10 @@ SceneResult evaluate(std::uint64_t seed, sim::GeneratedKind asked, const Options
       const ScanRecord& last = survey.records().back();
       if (last.stop_percent()) j["stop_percent"] = *last.stop_percent();
       const CandidateReport& c = last.nbv.candidate_report;  // why none was feasible
-      j["last_candidates"] = {{"grid_points", c.grid_points},
-                              {"not_empty", c.not_empty},
-                              {"cylinder_blocked", c.cylinder_blocked},
-                              {"unreachable", c.unreachable},
-                              {"feasible", c.feasible}};
+      j["last_candidates"] = {
+          {"grid_points", c.grid_points},           {"not_empty", c.not_empty},
+          {"cylinder_blocked", c.cylinder_blocked}, {"unreachable", c.unreachable},
+          {"already_scanned", c.already_scanned},   {"feasible", c.feasible}};
     }
 
     r.coverage = coverage.count().percent;

@@ -116,6 +116,31 @@ bool has_candidate_near(const std::vector<Point3>& ps, double x, double y, doubl
   return false;
 }
 
+TEST(Nbv, AGridPointAlreadyScannedFromIsNoCandidate) {
+  // The scan stood on a grid point (the robot drives to candidates): a scan from there
+  // would see again what it saw, so that point is no candidate; its neighbours still are.
+  FurnishedRoom m;
+  RobotGeometry robot;
+  NbvParams p;
+  p.candidate_spacing = 0.5;
+  const Point3 start(2.0, 2.0, 0);
+  CandidateReport before;
+  const auto all = find_candidates(m.t, robot, start, {}, p, &before);
+  ASSERT_GT(all.size(), 4u);
+  const Point3 scanned = all[all.size() / 2];
+  // The scan's optical centre as registration leaves it: a few millimetres off.
+  const Point3 past(scanned.x + 0.004, scanned.y - 0.003, robot.scanner_height);
+  CandidateReport after;
+  const auto left = find_candidates(m.t, robot, start, {past}, p, &after);
+  EXPECT_EQ(after.already_scanned, 1u);
+  EXPECT_EQ(left.size(), all.size() - 1);
+  EXPECT_EQ(after.feasible, left.size());
+  EXPECT_FALSE(has_candidate_near(left, scanned.x, scanned.y));
+  EXPECT_TRUE(has_candidate_near(left, scanned.x + 0.5, scanned.y) ||
+              has_candidate_near(left, scanned.x - 0.5, scanned.y));
+  EXPECT_EQ(before.already_scanned, 0u);
+}
+
 TEST(Nbv, CandidatesKeepTheSafetyCylinderFreeOfObstacles) {
   FurnishedRoom m;
   RobotGeometry robot;

@@ -146,10 +146,10 @@ void SurveyOutput::stage_done(SurveyStage stage, const ScanRecord& s) {
             nbv.best->position.y, nbv.best->score, nbv.stop_percent, s.seconds.nbv);
       else
         std::printf(
-            "  nbv: no feasible candidate (%zu grid points, %zu blocked, %zu unreachable) "
-            "[%.2f s]\n",
+            "  nbv: no feasible candidate (%zu grid points, %zu blocked, %zu unreachable, %zu "
+            "already scanned from) [%.2f s]\n",
             nbv.candidate_report.grid_points, nbv.candidate_report.cylinder_blocked,
-            nbv.candidate_report.unreachable, s.seconds.nbv);
+            nbv.candidate_report.unreachable, nbv.candidate_report.already_scanned, s.seconds.nbv);
       break;
     }
   }

@@ -306,6 +306,13 @@ std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry&
         ++rep.unreachable;
         continue;
       }
+      const auto scanned_here = [&](const Point3& c) {
+        return std::hypot(c.x - p.x, c.y - p.y) < r;
+      };
+      if (std::any_of(past_scans.begin(), past_scans.end(), scanned_here)) {
+        ++rep.already_scanned;
+        continue;
+      }
       ++rep.feasible;
       out.push_back(p);
     }

@@ -25,6 +25,7 @@ struct CandidateReport {
   std::size_t not_empty = 0;    // octant at scanner height not empty (or outside the map)
   std::size_t cylinder_blocked = 0;
   std::size_t unreachable = 0;
+  std::size_t already_scanned = 0;  // within a leaf of a past scan's optical centre
   std::size_t feasible = 0;
   std::size_t blind_octants_freed = 0;  // occluded octants exempted by the blind-zone rule
   std::size_t specks_freed = 0;  // leaves of enclosed specks (enclosed_speck_leaves) exempted
@@ -42,7 +43,9 @@ PlatformBody platform_body(const RobotGeometry& robot, double leaf_size);
 
 // Feasible candidate positions (scanner positions, z = scanner height), in grid
 // order (y, then x). `robot_position`: the robot on the floor (z ignored);
-// `past_scans`: optical centres of the scans so far (their blind zones). Uses
+// `past_scans`: optical centres of the scans so far (their blind zones; and a grid
+// point within a leaf of one is no candidate: in a static scene a scan from there would
+// see again what that scan saw, whatever the scoring's targets say). Uses
 // candidate_spacing, grid_anchor, limits and blind_zone_is_free of `params`.
 // Throws std::invalid_argument for a radius < 0 or a scanner height <= 0, or
 // a grid anchor beyond the key range.
