@@ -27,7 +27,6 @@ CoverageAccumulator::CoverageAccumulator(const CoverageReference& reference, dou
 }
 
 CoverageAccumulator::~CoverageAccumulator() = default;
-CoverageAccumulator::CoverageAccumulator(CoverageAccumulator&&) noexcept = default;
 
 void CoverageAccumulator::add(const Eigen::Vector3d& point_world) {
   if (!point_world.allFinite()) return;

@@ -47,8 +47,6 @@ class CoverageAccumulator {
   // Throws std::invalid_argument unless tolerance > 0. `reference` must outlive this.
   explicit CoverageAccumulator(const CoverageReference& reference, double tolerance = 0.03);
   ~CoverageAccumulator();
-  CoverageAccumulator(CoverageAccumulator&&) noexcept;
-  CoverageAccumulator& operator=(CoverageAccumulator&&) = delete;
 
   // Flags the samples within the tolerance of a measured point (world frame); a point
   // that is not finite is ignored.
