@@ -2,9 +2,11 @@
 
 #include <pcl/common/transforms.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 
 #include "semioctree/timing.h"
@@ -218,6 +220,8 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
   t0 = Clock::now();
   NbvParams nbv = params_.nbv;
   nbv.grid_anchor = map_.scanners().front();  // see NbvParams::grid_anchor
+  nbv.overlap_top = map_.ceiling_height();
+  nbv.min_overlap = params_.min_overlap.value_or(params_.registration.min_overlap);
   rec.room_only = params_.room_only;
   if (params_.room_only) {
     nbv.room = room_box(map_.tree(), map_.scanners(), params_.robot.scanner_height, 0.0,
@@ -238,18 +242,74 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
   return records_.back();
 }
 
+namespace {
+double planar_distance(const Point3& a, const Point3& b) {
+  return std::hypot(a.x - b.x, a.y - b.y);
+}
+}  // namespace
+
+std::optional<Point3> recovery_position(const ScanRecord& last, const Point3& failed,
+                                        double fraction, const std::vector<Point3>& tried) {
+  const Point3 from = last.scanner();
+  const double x = from.x + fraction * (failed.x - from.x);
+  const double y = from.y + fraction * (failed.y - from.y);
+  double nearest_tried = std::numeric_limits<double>::infinity();
+  for (const Point3& t : tried) nearest_tried = std::min(nearest_tried, planar_distance(t, from));
+  std::optional<Point3> best;
+  double best_d2 = 0;
+  for (const NbvCandidate& c : last.nbv.candidates) {
+    const Point3& p = c.position;
+    if (planar_distance(p, from) >= nearest_tried) continue;
+    const double d2 = (p.x - x) * (p.x - x) + (p.y - y) * (p.y - y);
+    if (!best || d2 < best_d2) best = p, best_d2 = d2;
+  }
+  return best;
+}
+
+double Survey::predicted_overlap_at(const Point3& position) const {
+  return predict_overlap(map_.tree(), position, params_.nbv.limits, 0.0, map_.ceiling_height(),
+                         2 * map_.tree().leaf_size(), params_.nbv.overlap_ray_step_deg,
+                         params_.nbv.threads)
+      .share;
+}
+
 SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
   SurveyOutcome out;
-  for (std::size_t i = records_.size(); i < params_.max_scans; ++i) {
+  std::optional<Point3> target;         // where the platform was sent (none: the first scan)
+  std::optional<double> predicted;      // the overlap predicted there
+  std::vector<Point3> failed_in_a_row;  // where the scans since the last placed one failed
+  for (std::size_t i = records_.size(); i < params_.max_scans;) {
     const IncomingScan in = platform.scan();
     observer_->scan_taken(i, in);
     try {
       add_scan(in);
     } catch (const RegistrationError& e) {
-      out.stopped_because = StopReason::kRegistrationFailed;
-      out.error = e.what();
-      return out;
+      platform.rejected();
+      RegistrationFailure f;
+      f.after_scan = records_.empty() ? 0 : records_.back().index;
+      f.position = target.value_or(Point3());
+      f.error = e.what();
+      if (target) failed_in_a_row.push_back(*target);
+      // Halfway back to the last placed scan, then a quarter of the way, ...
+      if (target && !records_.empty() && failed_in_a_row.size() <= params_.max_recoveries)
+        f.retry = recovery_position(records_.back(), failed_in_a_row.front(),
+                                    std::ldexp(1.0, -int(failed_in_a_row.size())), failed_in_a_row);
+      out.registration_failures.push_back(f);
+      if (!f.retry) {
+        observer_->registration_failed(f);
+        out.stopped_because = StopReason::kRegistrationFailed;
+        out.error = e.what();
+        return out;
+      }
+      platform.move_to(*f.retry);
+      target = f.retry;
+      predicted = predicted_overlap_at(*f.retry);
+      observer_->registration_failed(f);
+      continue;
     }
+    failed_in_a_row.clear();
+    ++i;
+    records_.back().predicted_overlap = predicted;
     const ScanRecord& rec = records_.back();
     platform.placed(rec.scanner_to_survey);
     observer_->scan_done(rec, map_);
@@ -261,9 +321,14 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
       out.stopped_because = StopReason::kStopPercentage;
       return out;
     }
-    if (i + 1 == params_.max_scans) break;
+    if (i == params_.max_scans) break;
     const NextScanChoice next = policy.choose(rec, map_);
     platform.move_to(next.position);
+    target = next.position;
+    const bool nbv_predicted = rec.nbv.best && rec.nbv.best_overlap &&
+                               rec.nbv.best->position.x == next.position.x &&
+                               rec.nbv.best->position.y == next.position.y;
+    predicted = nbv_predicted ? rec.nbv.best_overlap->share : predicted_overlap_at(next.position);
     observer_->moved(rec, next, policy);
   }
   out.stopped_because = StopReason::kMaxScans;

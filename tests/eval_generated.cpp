@@ -3,7 +3,7 @@
 // scene's scanner and robot, the CLI's planning defaults, the NBV policy), then judged:
 // how the survey ended, scans, coverage of the reference, the doors and windows found
 // against the room's true ones (precision, recall at IoU ≥ 0.5), the largest pose error,
-// seconds. Prints one JSON document (per scene and totals); a line per scene on stderr.
+// registrations failed (and recovered), predicted against achieved overlap, seconds. Prints one JSON document (per scene and totals); a line per scene on stderr.
 // --check exits 1 when the totals miss the acceptance thresholds
 // (docs/generated-scenes.md).
 //
@@ -67,6 +67,8 @@ struct SceneResult {
   bool finished = false;  // ended by the stop percentage, without error
   double coverage = 0;
   std::size_t detections = 0, truths = 0, matched = 0;
+  std::size_t registration_failures = 0;
+  std::vector<double> overlap_differences;  // predicted - achieved, per registered scan
 };
 
 SceneResult evaluate(std::uint64_t seed, sim::GeneratedKind asked, const Options& o) {
@@ -112,6 +114,15 @@ SceneResult evaluate(std::uint64_t seed, sim::GeneratedKind asked, const Options
     j["stopped_because"] = to_string(outcome.stopped_because);
     if (!outcome.error.empty()) j["error"] = outcome.error;
     j["scans"] = survey.records().size();
+    r.registration_failures = outcome.registration_failures.size();
+    j["registration_failures"] = r.registration_failures;  // recovered ones and a last one
+    json overlaps = json::array();  // [predicted, achieved] of each scan registered by ICP
+    for (const ScanRecord& rec : survey.records())
+      if (rec.predicted_overlap && rec.registration) {
+        overlaps.push_back({*rec.predicted_overlap, rec.registration->icp.overlap});
+        r.overlap_differences.push_back(*rec.predicted_overlap - rec.registration->icp.overlap);
+      }
+    j["overlap_predicted_achieved"] = overlaps;
     r.finished = outcome.stopped_because == StopReason::kStopPercentage;
     if (!survey.records().empty()) {
       const ScanRecord& last = survey.records().back();
@@ -215,7 +226,8 @@ int main(int argc, char** argv) {
     const sim::GeneratedKind kind = sim::generated_kind_from_string(o.kind);
     const auto t0 = Clock::now();
     json scenes = json::array();
-    std::size_t finished = 0, detections = 0, truths = 0, matched = 0;
+    std::size_t finished = 0, detections = 0, truths = 0, matched = 0, failures = 0;
+    std::vector<double> differences;
     double coverage_sum = 0, coverage_min = std::numeric_limits<double>::infinity();
     json stopped = json::object();
     for (std::uint64_t seed = first; seed <= last; ++seed) {
@@ -225,6 +237,9 @@ int main(int argc, char** argv) {
       coverage_sum += r.coverage;
       coverage_min = std::min(coverage_min, r.coverage);
       detections += r.detections, truths += r.truths, matched += r.matched;
+      failures += r.registration_failures;
+      differences.insert(differences.end(), r.overlap_differences.begin(),
+                         r.overlap_differences.end());
       const std::string why = j["stopped_because"];
       stopped[why] = stopped.value(why, 0) + 1;
       std::fprintf(stderr, "%s\n", j.dump().c_str());
@@ -235,6 +250,9 @@ int main(int argc, char** argv) {
     const double mean = coverage_sum / double(n);
     const double precision = detections ? double(matched) / double(detections) : 1.0;
     const double recall = truths ? double(matched) / double(truths) : 1.0;
+    double abs_sum = 0, signed_sum = 0;
+    for (double d : differences) abs_sum += std::abs(d), signed_sum += d;
+    const double scans_compared = std::max<double>(1.0, double(differences.size()));
     const bool pass = finished == n && coverage_min >= o.min_coverage && mean >= o.mean_coverage &&
                       precision >= o.min_precision && recall >= o.min_recall;
     const json doc = {{"seeds", o.seeds},
@@ -252,6 +270,11 @@ int main(int argc, char** argv) {
                           {"matched", matched},
                           {"precision", precision},
                           {"recall", recall}}},
+                        {"registration_failures", failures},
+                        {"overlap",
+                         {{"scans", differences.size()},
+                          {"mean_abs_difference", abs_sum / scans_compared},
+                          {"mean_difference", signed_sum / scans_compared}}},
                         {"seconds", seconds_since(t0)},
                         {"thresholds_met", pass}}}};
     std::printf("%s\n", doc.dump(2).c_str());

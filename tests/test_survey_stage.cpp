@@ -1,9 +1,10 @@
 // The survey stage (include/semioctree/survey.h) driven from the library, with the
 // simulated platform: the order of what it reports, its stop rules, the policy's choice
-// reaching the platform, a failed registration ending the survey with the map kept, and
-// surveys of rooms whose ceiling the scans do not find.
+// reaching the platform, a failed registration recovered or ending the survey with the map
+// kept, and surveys of rooms whose ceiling the scans do not find.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -164,33 +165,121 @@ TEST(SurveyStage, SpendsTheBudgetAndDrivesToThePolicysChoice) {
   EXPECT_LT(platform.truths()[1].pose_error_m, 0.05);
 }
 
-// The simulated platform, but its second scan reports a pose 0.5 m off and claims its
-// odometry is good to 1 mm: ICP's correction is then a "false match".
+// The simulated platform, but the first `lies` attempts at its second scan report a pose
+// 0.5 m off and claim the odometry is good to 1 mm: ICP's correction is then a "false
+// match". It remembers where each scan was taken (survey frame).
 class LyingPlatform : public SimulatedPlatform {
  public:
-  using SimulatedPlatform::SimulatedPlatform;
+  LyingPlatform(const sim::Scene& scene, int lies) : SimulatedPlatform(scene, 1, 0), lies_(lies) {}
   IncomingScan scan() override {
     IncomingScan in = SimulatedPlatform::scan();
-    if (truths().size() == 2) {
+    if (truths().size() == 2 && lies_-- > 0) {
       in.x += 0.5;
       in.max_correction_m = 0.001;
     }
     return in;
   }
+  void move_to(const Point3& target) override {
+    SimulatedPlatform::move_to(target);
+    targets.push_back(target);
+  }
+  std::vector<Point3> targets;
+
+ private:
+  int lies_;
+};
+
+// A survey of the test scene (threshold 0: never complete) on a LyingPlatform, run.
+struct LyingSurvey {
+  LyingSurvey(int lies, std::size_t max_scans, std::size_t max_recoveries)
+      : scene(test_scene()), platform(scene, lies), survey(params(max_scans, max_recoveries)) {
+    BestScorePolicy nbv;
+    outcome = survey.run(platform, nbv);
+  }
+  SurveyParams params(std::size_t max_scans, std::size_t max_recoveries) const {
+    SurveyParams p = params_for(scene, max_scans, 0.0);
+    p.max_recoveries = max_recoveries;
+    return p;
+  }
+  sim::Scene scene;
+  LyingPlatform platform;
+  Survey survey;
+  SurveyOutcome outcome;
 };
 
 TEST(SurveyStage, AFailedRegistrationEndsTheSurveyAndKeepsTheMapOfTheScansBefore) {
-  const sim::Scene scene = test_scene();
-  LyingPlatform platform(scene, 1, 0);
-  Survey survey(params_for(scene, 4, 0.0), nullptr);
-  BestScorePolicy nbv;
-  const SurveyOutcome outcome = survey.run(platform, nbv);
+  LyingSurvey run(1, 4, 0);
+  const SurveyOutcome& outcome = run.outcome;
+  const Survey& survey = run.survey;
   EXPECT_EQ(outcome.stopped_because, StopReason::kRegistrationFailed);
   EXPECT_NE(outcome.error.find("scan 1 could not be registered"), std::string::npos)
       << outcome.error;
   EXPECT_EQ(survey.records().size(), 1u);
   EXPECT_EQ(survey.map().scanners().size(), 1u);
   EXPECT_STREQ(to_string(outcome.stopped_because), "registration_failed");
+  ASSERT_EQ(outcome.registration_failures.size(), 1u);
+  EXPECT_FALSE(outcome.registration_failures[0].retry);
+}
+
+double planar_distance(const Point3& a, const Point3& b) {
+  return std::hypot(a.x - b.x, a.y - b.y);
+}
+bool same_position(const Point3& a, const Point3& b) {
+  return a.x == b.x && a.y == b.y;
+}
+
+// One failed registration: the scan is dropped, the robot scans again at the first
+// scan's candidate nearest halfway back, and the survey goes on from there.
+TEST(SurveyStage, AFailedRegistrationIsRecoveredByAScanNearerTheLastPlacedOne) {
+  LyingSurvey run(1, 3, 3);
+  const SurveyOutcome& outcome = run.outcome;
+  const Survey& survey = run.survey;
+  const LyingPlatform& platform = run.platform;
+  EXPECT_EQ(outcome.stopped_because, StopReason::kMaxScans) << outcome.error;
+  ASSERT_EQ(survey.records().size(), 3u);
+  ASSERT_EQ(outcome.registration_failures.size(), 1u);
+  const RegistrationFailure& f = outcome.registration_failures[0];
+  EXPECT_EQ(f.after_scan, 0u);
+  EXPECT_NE(f.error.find("scan 1 could not be registered"), std::string::npos) << f.error;
+  ASSERT_TRUE(f.retry);
+  ASSERT_GE(platform.targets.size(), 2u);
+  EXPECT_EQ(platform.targets[0].x, f.position.x);  // the NBV it failed at
+  EXPECT_EQ(platform.targets[1].x, f.retry->x);    // then the retry
+  const ScanRecord& first = survey.records()[0];
+  EXPECT_TRUE(same_position(*f.retry, *recovery_position(first, f.position, 0.5, {f.position})));
+  // Nearer the first scan than the failed position, and a candidate of the first scan.
+  EXPECT_LT(planar_distance(*f.retry, first.scanner()),
+            planar_distance(f.position, first.scanner()));
+  EXPECT_TRUE(
+      std::any_of(first.nbv.candidates.begin(), first.nbv.candidates.end(),
+                  [&](const NbvCandidate& c) { return same_position(c.position, *f.retry); }));
+  // The second record is the retry, placed where the robot stood.
+  EXPECT_LT(planar_distance(survey.records()[1].scanner(), *f.retry), 0.05);
+  EXPECT_LT(platform.truths()[1].pose_error_m, 0.05);
+}
+
+// Failures in a row: each retry nearer the last placed scan, at most max_recoveries of
+// them; the survey ends when no nearer candidate is left or the recoveries are spent.
+TEST(SurveyStage, RecoveriesComeNearerTheLastPlacedScanAndAreBounded) {
+  LyingSurvey run(100, 4, 3);
+  const SurveyOutcome& outcome = run.outcome;
+  const Survey& survey = run.survey;
+  const SurveyParams& p = survey.params();
+  EXPECT_EQ(outcome.stopped_because, StopReason::kRegistrationFailed);
+  EXPECT_EQ(survey.records().size(), 1u);
+  const std::vector<RegistrationFailure>& f = outcome.registration_failures;
+  ASSERT_GE(f.size(), 2u);
+  ASSERT_LE(f.size(), p.max_recoveries + 1);
+  EXPECT_FALSE(f.back().retry);
+  const Point3 first = survey.records()[0].scanner();
+  for (std::size_t i = 0; i + 1 < f.size(); ++i) {
+    ASSERT_TRUE(f[i].retry) << i;
+    EXPECT_TRUE(same_position(f[i + 1].position, *f[i].retry)) << i;  // scanned there
+    EXPECT_LT(planar_distance(*f[i].retry, first), planar_distance(f[i].position, first)) << i;
+  }
+  if (f.size() < p.max_recoveries + 1) {  // ended early: nothing nearer was left
+    EXPECT_FALSE(recovery_position(survey.records()[0], f[0].position, 0.125, {f.back().position}));
+  }
 }
 
 // A 6 × 4 m room of walls `wall_height` high with a table, a ceiling slab at `ceiling`
@@ -277,7 +366,8 @@ TEST(SurveyStage, AScannerThatCannotSeeTheCeilingSurveysTheRoom) {
 
 TEST(SurveyStage, RandomPolicyDrawsAmongTheCandidatesReproducibly) {
   ScanRecord r;
-  for (int i = 0; i < 7; ++i) r.nbv.candidates.push_back({Point3(i, 2 * i, 1.5), double(i)});
+  for (int i = 0; i < 7; ++i)
+    r.nbv.candidates.push_back({Point3(i, 2 * i, 1.5), double(i), std::nullopt});
   const SurveyMap map{SurveyMapParams{}};
   RandomCandidatePolicy a(5), b(5), c(6);
   bool differs = false;

@@ -27,11 +27,18 @@ struct SurveyParams {
   PreprocessParams preprocess;
   RegistrationParams registration;
   GlobalAlignParams global_align;  // scans without a pose (ScanPlacement::kNoPose)
-  NbvParams nbv;                   // its room, grid anchor and progress are set by the survey
+  // Its room, grid anchor, overlap_top, min_overlap and progress are set by the survey.
+  NbvParams nbv;
   RobotGeometry robot;
   double stop_percent = 0.1;   // Eq 5 threshold, %
   bool room_only = true;       // targets and Eq 5 inside room_box (false: the whole map)
   std::size_t max_scans = 10;  // Survey::run's scan budget (at least 1)
+  // The predicted overlap a candidate's scan needs with the map (NbvParams::min_overlap;
+  // docs/nbv.md). None: the share registration itself needs, registration.min_overlap.
+  std::optional<double> min_overlap;
+  // Survey::run: failed registrations in a row recovered from by a scan nearer the last
+  // placed one (recovery_position); 0: the first failure ends the survey.
+  std::size_t max_recoveries = 3;
 };
 
 // What the reported pose of a scan is worth. The first scan is always placed by its
@@ -87,6 +94,10 @@ struct ScanRecord {
   bool room_only = false;       // the room was asked for
   std::optional<RoomBox> room;  // where targets and Eq 5 were counted (none: whole map)
   NbvResult nbv;                // candidates, their scores, the best one, Eq 5
+  // Survey::run: the overlap with the map predicted for this scan's position when it was
+  // chosen (predict_overlap, as the NBV predicts it), to set beside registration's
+  // overlap; none for the first scan.
+  std::optional<double> predicted_overlap;
   struct Seconds {
     double preprocess = 0, registration = 0, occupancy = 0, openings = 0, occlusion = 0, nbv = 0,
            total = 0;
@@ -136,6 +147,14 @@ class RandomCandidatePolicy : public NextScanPolicy {
   std::mt19937_64 rng_;
 };
 
+// A scan Survey::run could not register, and where it scanned again.
+struct RegistrationFailure {
+  std::size_t after_scan = 0;  // index of the last placed scan before it
+  Point3 position;             // where the failed scan was asked for (survey frame)
+  std::string error;
+  std::optional<Point3> retry;  // the recovery position; none: the survey ended
+};
+
 // Where the scans come from and how the scanner moves.
 class ScanPlatform {
  public:
@@ -144,6 +163,9 @@ class ScanPlatform {
   virtual IncomingScan scan() = 0;
   // The survey placed the last scan at this pose (survey frame).
   virtual void placed(const Eigen::Isometry3d& scanner_to_survey) { (void)scanner_to_survey; }
+  // The survey could not place the last scan: it is dropped, and the odometry of the
+  // leg runs on from the last placed scan.
+  virtual void rejected() {}
   // Moves the scanner to `target` (survey frame; its z is ignored).
   virtual void move_to(const Point3& target) = 0;
 };
@@ -163,12 +185,25 @@ class SurveyObserver {
                      const NextScanPolicy& policy) {
     (void)scan, (void)choice, (void)policy;
   }
+  // Survey::run: a scan could not be registered (and, with `failure.retry`, the platform
+  // moved there to scan again).
+  virtual void registration_failed(const RegistrationFailure& failure) { (void)failure; }
 };
 
 struct SurveyOutcome {
   StopReason stopped_because = StopReason::kMaxScans;
-  std::string error;  // kRegistrationFailed: why
+  std::string error;                                       // kRegistrationFailed: why
+  std::vector<RegistrationFailure> registration_failures;  // recovered from, or the last
 };
+
+// Where to scan again after a scan at `failed` could not be registered: of the
+// candidates of `last` (the last placed scan), the one nearest the point `fraction` of
+// the way from its scanner to `failed` (nearer the map the scans agree on, so more of
+// the new scan overlaps it) among those nearer its scanner than every position in
+// `tried` (the failed ones), so that each retry comes nearer. None without such a
+// candidate.
+std::optional<Point3> recovery_position(const ScanRecord& last, const Point3& failed,
+                                        double fraction, const std::vector<Point3>& tried);
 
 class Survey {
  public:
@@ -184,8 +219,11 @@ class Survey {
                              const std::optional<Point3>& robot_position = std::nullopt);
 
   // The loop: scans from `platform` until the stop percentage, no candidate or the
-  // budget ends it; moves to `policy`'s choice in between. A failed registration ends
-  // the survey (kRegistrationFailed with the error), it does not throw.
+  // budget ends it; moves to `policy`'s choice in between. A scan that cannot be
+  // registered is dropped (ScanPlatform::rejected) and taken again at recovery_position,
+  // halfway back to the last placed scan, then a quarter, ... up to
+  // SurveyParams::max_recoveries times in a row; then the survey ends
+  // (kRegistrationFailed with the error). It does not throw for a failed registration.
   SurveyOutcome run(ScanPlatform& platform, NextScanPolicy& policy);
 
   const SurveyMap& map() const { return map_; }
@@ -200,6 +238,10 @@ class Survey {
                                                 const IncomingScan& in,
                                                 const std::string& pose_failure,
                                                 double* scanner_shift_m) const;
+
+  // The overlap a scan at `position` is predicted to have with the map (as the NBV's
+  // candidates are judged).
+  double predicted_overlap_at(const Point3& position) const;
 
   SurveyParams params_;
   SurveyObserver* observer_;

@@ -106,6 +106,12 @@ void SimulatedPlatform::placed(const Eigen::Isometry3d& scanner_to_survey) {
   last_points_.reset();
 }
 
+void SimulatedPlatform::rejected() {
+  if (!last_points_) throw std::logic_error("SimulatedPlatform: no scan to reject");
+  truths_.pop_back();
+  last_points_.reset();
+}
+
 void SimulatedPlatform::move_to(const Point3& target) {
   const Eigen::Vector3d w = survey_to_world_ * Eigen::Vector3d(target.x, target.y, 0.0);
   robot_.move_to({w.x(), w.y(), robot_.true_pose().yaw_deg});

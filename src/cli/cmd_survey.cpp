@@ -55,6 +55,7 @@ struct SurveyOptions {
   std::string out;
   PlanningOptions plan;
   int max_scans = 10;
+  int max_recoveries = 3;
   bool homogeneous = false;
   std::uint64_t seed = 1;
   // "random": a random feasible candidate (the baseline); "oracle": the feasible
@@ -259,6 +260,7 @@ void run_survey(const SurveyOptions& o) {
   sim_platform::apply_scene(scene, p);
   apply_planning_options(o.plan, p, o.homogeneous);
   p.max_scans = std::size_t(o.max_scans);
+  p.max_recoveries = std::size_t(o.max_recoveries);
   if (o.homogeneous)
     std::printf("homogeneous grid of %.3f m voxels (the baseline): expect it to be slow\n",
                 o.plan.leaf);
@@ -357,6 +359,12 @@ void add_survey_command(CLI::App& app) {
       ->required();
   add_planning_options(*cmd, o->plan);
   cmd->add_option("--max-scans", o->max_scans, "scan budget")->capture_default_str();
+  cmd->add_option("--max-recoveries", o->max_recoveries,
+                  "a scan that cannot be registered is dropped and taken again nearer the last "
+                  "placed scan (halfway back, then a quarter, ...): at most this many times in "
+                  "a row before the survey ends; 0: the first failure ends it")
+      ->check(whole_in(0, 100))
+      ->capture_default_str();
   cmd->add_flag("--homogeneous", o->homogeneous,
                 "use the homogeneous grid of leaf-size voxels (the paper's baseline) instead of "
                 "the semioctree");

@@ -47,6 +47,12 @@ void add_planning_options(CLI::App& cmd, PlanningOptions& o) {
                  "ceiling height above the floor, m: the map's top (default: the first scan's "
                  "ceiling, or without one the top of its points)")
       ->check(finite_positive(100));
+  cmd.add_option("--min-overlap", o.min_overlap,
+                 "share (0-1) of a next scan's returns predicted to lie on surfaces already "
+                 "mapped, below which a candidate is passed over for the next best (rays every "
+                 "1.5 degrees through the map); default: the share registration needs (0.25); 0: "
+                 "no prediction limit")
+      ->check(finite_in(0, 1));
   cmd.add_option("--threads", o.threads, "worker threads (0: one per core; at most 256)")
       ->check(thread_count())
       ->capture_default_str();
@@ -77,6 +83,7 @@ void apply_planning_options(const PlanningOptions& o, SurveyParams& p, bool homo
   p.nbv.limits = p.map.limits;
   p.stop_percent = o.stop;
   p.room_only = !o.whole_map;
+  if (o.min_overlap >= 0) p.min_overlap = o.min_overlap;
 }
 
 }  // namespace semioctree::cli

@@ -138,18 +138,27 @@ void SurveyOutput::stage_done(SurveyStage stage, const ScanRecord& s) {
     case SurveyStage::kPlanned: {
       if (progress_) progress_->finish();
       const NbvResult& nbv = s.nbv;
-      if (nbv.best)
+      if (nbv.best) {
         std::printf(
             "  nbv: %zu feasible candidates, %zu occluded targets; best (%.3f, %.3f) score "
             "%.1f, stop %.3f %% [%.2f s]\n",
             nbv.candidate_report.feasible, nbv.scoring.targets, nbv.best->position.x,
             nbv.best->position.y, nbv.best->score, nbv.stop_percent, s.seconds.nbv);
-      else
+        if (nbv.best_overlap)
+          std::printf("  nbv: predicted overlap %.0f %% (%.0f %% of the rays)%s [%.2f s]\n",
+                      100 * nbv.best_overlap->share, 100 * nbv.best_overlap->unweighted_share,
+                      nbv.low_overlap ? (", after " + std::to_string(nbv.low_overlap) +
+                                         " better-scored candidates predicted too low")
+                                            .c_str()
+                                      : "",
+                      nbv.seconds_overlap);
+      } else
         std::printf(
             "  nbv: no feasible candidate (%zu grid points, %zu blocked, %zu unreachable, %zu "
-            "already scanned from) [%.2f s]\n",
+            "already scanned from, %zu predicted to overlap the map too little) [%.2f s]\n",
             nbv.candidate_report.grid_points, nbv.candidate_report.cylinder_blocked,
-            nbv.candidate_report.unreachable, nbv.candidate_report.already_scanned, s.seconds.nbv);
+            nbv.candidate_report.unreachable, nbv.candidate_report.already_scanned, nbv.low_overlap,
+            s.seconds.nbv);
       break;
     }
   }
@@ -201,7 +210,13 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
                          {"z", best->position.z},
                          {"score", best->score}}
                   : json(nullptr);
+  if (best && s.nbv.best_overlap) {
+    r["nbv"]["predicted_overlap"] = s.nbv.best_overlap->share;
+    r["nbv"]["predicted_overlap_unweighted"] = s.nbv.best_overlap->unweighted_share;
+  }
   r["candidates"] = s.nbv.candidate_report.feasible;
+  r["candidates_low_overlap"] = s.nbv.low_overlap;
+  r["predicted_overlap"] = s.predicted_overlap ? json(*s.predicted_overlap) : json(nullptr);
   r["occluded_targets"] = s.nbv.scoring.targets;
   if (s.room)  // where targets and Eq 5 were counted (null: the whole map)
     r["room"] = {{"min", {s.room->min.x, s.room->min.y, s.room->min.z}},
@@ -256,6 +271,20 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
   records_[s.index] = r;
 }
 
+void SurveyOutput::registration_failed(const RegistrationFailure& f) {
+  json r = {{"after_scan", f.after_scan},
+            {"position", {f.position.x, f.position.y}},
+            {"error", f.error},
+            {"retry", f.retry ? json{f.retry->x, f.retry->y} : json(nullptr)}};
+  failures_.push_back(r);
+  if (f.retry)
+    std::printf(
+        "  registration failed: %s\n  the scan is dropped; scanning again at (%.3f, %.3f), "
+        "nearer scan %zu\n",
+        f.error.c_str(), f.retry->x, f.retry->y, f.after_scan);
+  std::fflush(stdout);
+}
+
 void SurveyOutput::write_survey_json(const std::string& stopped_because, const json& extra,
                                      const SurveyMap* map) const {
   json openings = json::array();
@@ -286,6 +315,7 @@ void SurveyOutput::write_survey_json(const std::string& stopped_because, const j
             // occluded space that the NBV (if any) would still reveal.
             {"complete", stopped_because == "stop_percentage"},
             {"scans", records_},
+            {"registration_failures", failures_},
             {"openings", openings},
             {"peak_rss_mib", peak_resident_mib()}};
   for (const auto& [k, v] : extra.items()) j[k] = v;

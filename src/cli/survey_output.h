@@ -24,6 +24,8 @@ class SurveyOutput : public SurveyObserver {
   void candidates_scored(std::size_t done, std::size_t total) override;
   // Writes scan_NN/ and keeps the scan's survey.json record.
   void scan_done(const ScanRecord& scan, const SurveyMap& map) override;
+  // Says so and keeps it for survey.json's "registration_failures".
+  void registration_failed(const RegistrationFailure& failure) override;
 
   // The record of scan `index` (after scan_done), for keys a command adds.
   nlohmann::json& record(std::size_t index) { return records_.at(index); }
@@ -38,6 +40,7 @@ class SurveyOutput : public SurveyObserver {
   SurveyParams params_;
   std::unique_ptr<CountProgress> progress_;  // one per NBV, while candidates are scored
   std::vector<nlohmann::json> records_;
+  nlohmann::json failures_ = nlohmann::json::array();
 };
 
 // survey.json's "octants" of a map (total, by_level, by_label), and its

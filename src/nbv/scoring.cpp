@@ -1,9 +1,11 @@
 #include "semioctree/nbv/scoring.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 #include "../parallel_for.h"
 #include "../scanner_limits.h"
@@ -142,11 +144,37 @@ NbvResult next_best_view(const SemiOcTree& tree, const RobotGeometry& robot,
   const std::vector<Target> targets = targets_for(tree, params);
   const std::vector<double> scores = score_targets(tree, targets, positions, params, &res.scoring);
   res.candidates.reserve(positions.size());
-  for (std::size_t i = 0; i < positions.size(); ++i) {
-    res.candidates.push_back({positions[i], scores[i]});
-    if (!res.best || scores[i] > res.best->score) res.best = res.candidates.back();
-  }
+  for (std::size_t i = 0; i < positions.size(); ++i)
+    res.candidates.push_back({positions[i], scores[i], std::nullopt});
   res.seconds_scoring = seconds_since(t0);
+  t0 = Clock::now();
+  // Best score first (grid order on ties); with a prediction, the first whose scan is
+  // predicted to overlap the map enough. A candidate that sees nothing (score 0) is not
+  // tried: as the best it only says that the survey is done (Eq 5 is 0 there), and when
+  // every candidate that sees something is passed over, there is no safe NBV.
+  std::vector<std::size_t> order(res.candidates.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return res.candidates[a].score > res.candidates[b].score;
+  });
+  for (std::size_t i : order) {
+    NbvCandidate& c = res.candidates[i];
+    if (res.low_overlap > 0 && c.score <= 0) break;
+    if (params.overlap_top && c.score > 0) {
+      const OverlapPrediction p =
+          predict_overlap(tree, c.position, params.limits, 0.0, *params.overlap_top,
+                          2 * tree.leaf_size(), params.overlap_ray_step_deg, params.threads);
+      c.predicted_overlap = p.share;
+      if (p.share < params.min_overlap) {
+        ++res.low_overlap;
+        continue;
+      }
+      res.best_overlap = p;
+    }
+    res.best = c;
+    break;
+  }
+  res.seconds_overlap = seconds_since(t0);
   t0 = Clock::now();
   if (res.best)
     res.stop_percent =

@@ -33,6 +33,14 @@ struct NbvParams {
   // The surveyed room (room_box): occluded space outside it is no target and
   // Eq 5 counts volumes inside it only. Empty: the whole map, as the paper reads.
   std::optional<RoomBox> room;
+  // Registration-safe candidates (docs/nbv.md): with `overlap_top` set (the map's top,
+  // m above its floor at z = 0), the chosen candidate's scan overlap with the map is
+  // predicted (predict_overlap, rays `overlap_ray_step_deg` apart, floor and ceiling
+  // returns left out), and candidates predicted below `min_overlap` are passed over,
+  // best score first, until one is not. Empty: no prediction.
+  std::optional<double> overlap_top;
+  double min_overlap = 0;  // share, 0-1
+  double overlap_ray_step_deg = 1.5;
   // Called after each candidate is scored with (candidates scored, candidates),
   // from the scoring threads: it must be thread-safe. Empty: no calls.
   std::function<void(std::size_t, std::size_t)> progress;

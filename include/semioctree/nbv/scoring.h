@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "semioctree/nbv/candidates.h"
+#include "semioctree/nbv/overlap.h"
 #include "semioctree/nbv/params.h"
 #include "semioctree/nbv/room.h"
 #include "semioctree/occlusion.h"
@@ -20,6 +21,8 @@ struct NbvCandidate {
   // m³), method 2 level-ℓ cells, method 3 m² of frontier faces. Compare scores of
   // one method only.
   double score = 0;
+  // Predicted overlap (NbvParams::overlap_top): set on the candidates tried, best first.
+  std::optional<double> predicted_overlap;
 };
 
 struct ScoringStats {
@@ -31,12 +34,19 @@ struct ScoringStats {
 };
 
 struct NbvResult {
-  std::optional<NbvCandidate> best;      // highest score (first in grid order on ties)
+  // Highest score (first in grid order on ties) among the candidates whose predicted
+  // overlap is not below NbvParams::min_overlap (all, without a prediction). Candidates
+  // of score 0 are not predicted; none is best once a better one was passed over.
+  std::optional<NbvCandidate> best;
   std::vector<NbvCandidate> candidates;  // all feasible candidates, scored, in grid order
   CandidateReport candidate_report;
   ScoringStats scoring;
-  double stop_percent = 0;  // from the best candidate; 0 when there is none
-  double seconds_candidates = 0, seconds_scoring = 0, seconds_stop = 0;  // wall time
+  // The best one's (NbvParams::overlap_top; none for a best of score 0).
+  std::optional<OverlapPrediction> best_overlap;
+  std::size_t low_overlap = 0;  // candidates passed over for their predicted overlap
+  double stop_percent = 0;      // from the best candidate; 0 when there is none
+  double seconds_candidates = 0, seconds_scoring = 0, seconds_overlap = 0,
+         seconds_stop = 0;  // wall time
 };
 
 // Eq 3 score of each scanner position (any positions, feasible or not), in the

@@ -52,6 +52,9 @@ class SimulatedPlatform : public ScanPlatform {
   // increments are trusted), with correction bounds from the robot's odometry noise.
   IncomingScan scan() override;
   void placed(const Eigen::Isometry3d& scanner_to_survey) override;
+  // The last scan is forgotten (its truth too); the next one's odometry leg still starts
+  // at the last placed scan.
+  void rejected() override;
   void move_to(const Point3& target) override;  // survey frame, through the first scan
 
   const std::vector<ScanTruth>& truths() const { return truths_; }
