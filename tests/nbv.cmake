@@ -5,6 +5,8 @@ semioctree_add_test(test_nbv_candidates SOURCES test_nbv_candidates.cpp LIBS sem
 target_include_directories(test_nbv_candidates PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
 semioctree_add_test(test_nbv_overlap SOURCES test_nbv_overlap.cpp LIBS semioctree)
 target_include_directories(test_nbv_overlap PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+semioctree_add_test(test_nbv_rooms SOURCES test_nbv_rooms.cpp LIBS semioctree)
+target_include_directories(test_nbv_rooms PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
 semioctree_add_test(test_nbv SOURCES test_nbv.cpp LIBS semioctree)
 target_include_directories(test_nbv PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
 # The lab tests need the synthetic scanner for their input.

@@ -21,6 +21,7 @@
 #include "semioctree/octomap_ext/file_io.h"
 #include "support/cli_run.h"
 #include "support/sample_trees.h"
+#include "support/sanitized.h"
 #include "support/synthetic_clouds.h"
 
 namespace semioctree {
@@ -274,7 +275,7 @@ TEST(Cli, MapNbvTakesAnOctomapMapOrASemioctree) {
 // the free space seen through them is out of the room.
 TEST(Cli, MapNbvFindsDoorsAndWindowsInAnOctomapMap) {
   // Sanitized, MapNbvOnUserMaps' rooms take map-nbv through the same code.
-  if (std::getenv("SEMIOCTREE_SANITIZED")) GTEST_SKIP() << "skipped when sanitized (minutes there)";
+  if (semioctree::testing::sanitized()) GTEST_SKIP() << "skipped when sanitized (minutes there)";
   const auto dir = testing::temp_dir("cli-map-nbv-lab");
   const std::string pcd = (dir / "scan.pcd").string();
   const CliRun scan = run_cli("scan --scene " + std::string(SEMIOCTREE_SOURCE_DIR) +

@@ -16,15 +16,14 @@
 #include "semioctree/sim/ground_truth.h"
 #include "semioctree/sim/scene.h"
 #include "support/coverage_scenes.h"
+#include "support/sanitized.h"
 
 namespace {
 
 using namespace semioctree::sim;
 using namespace semioctree::testing;
 
-bool sanitized() {
-  return std::getenv("SEMIOCTREE_SANITIZED") != nullptr;
-}
+using semioctree::testing::sanitized;
 
 // Membership of every sample in the reference.
 std::vector<bool> visible_flags(const CoverageReference& ref) {

@@ -15,6 +15,7 @@
 #include "semioctree/scan_io.h"
 
 #ifdef SEMIOCTREE_HAVE_SIM
+#include "support/sanitized.h"
 #include "support/unposed_pairs.h"
 #endif
 
@@ -23,9 +24,7 @@ namespace {
 
 constexpr double kMaxTranslation = 0.02, kMaxYawDeg = 0.3;  // the acceptance bounds
 
-bool sanitized() {
-  return std::getenv("SEMIOCTREE_SANITIZED") != nullptr;
-}
+using semioctree::testing::sanitized;
 
 Cloud::Ptr transformed(const Cloud& in, const Eigen::Isometry3d& t) {
   Cloud::Ptr out(new Cloud);

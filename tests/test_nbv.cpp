@@ -179,6 +179,23 @@ TEST(Nbv, RoomBoxIsTheFreeSpaceTheScannersStandIn) {
   EXPECT_FALSE(room_box(m.t, scanner, 1.525, 2.4, 2.4));
 }
 
+// A scanner height on the faces of octants (1.2 m: a multiple of the leaf and of the
+// 0.4 m octants) takes the octants above it, as the tree's keys do; compared in metres,
+// rounding once put the plane in neither, and the room broke up along them.
+TEST(Nbv, RoomBoxAtAHeightOnOctantFacesIsTheWholeRoom) {
+  Map m(8, 5, 3);  // 6.4 × 4 × 2.4 m
+  m.walls(6.4, 4.0, 2.4);
+  m.leaves({4.0, 0, 0}, {4.05, 4.0, 2.4}, Label::kOccupied);  // a wall at x = 4 m
+  for (const double height : {1.2, 1.6, 0.8}) {
+    const auto box = room_box(m.t, {{2.025, 2.025, height}}, height, 0.0, 2.4);
+    ASSERT_TRUE(box) << height;
+    EXPECT_NEAR(box->min.x, 0.0, 1e-9) << height;
+    EXPECT_NEAR(box->max.x, 4.05, 1e-9) << height;
+    EXPECT_NEAR(box->min.y, 0.0, 1e-9) << height;
+    EXPECT_NEAR(box->max.y, 4.0, 1e-9) << height;
+  }
+}
+
 TEST(Nbv, NextBestViewSameForAnyThreadCount) {
   PocketRoom m;
   m.set(1.0, 4.0, 0.5, 3, Label::kOccluded);

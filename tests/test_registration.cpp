@@ -22,6 +22,7 @@
 #include "semioctree/sim/robot.h"
 #include "semioctree/sim/scanner.h"
 #include "semioctree/sim/scene.h"
+#include "support/sanitized.h"
 #endif
 
 namespace semioctree {
@@ -221,9 +222,7 @@ TEST(Registration, EmptyOrTinyCloudsFail) {
 
 #ifdef SEMIOCTREE_HAVE_SIM
 
-bool sanitized() {
-  return std::getenv("SEMIOCTREE_SANITIZED") != nullptr;
-}
+using semioctree::testing::sanitized;
 
 // The lab scene scanned from the robot's start and from a second free position in the
 // main room, each preprocessed in its own scanner frame (so independent of the

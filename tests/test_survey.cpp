@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "support/cli_run.h"
+#include "support/sanitized.h"
 
 namespace semioctree {
 namespace {
@@ -28,9 +29,7 @@ namespace fs = std::filesystem;
 
 const std::string kScenes = std::string(SEMIOCTREE_SOURCE_DIR) + "/sim/scenes/";
 
-bool sanitized() {
-  return std::getenv("SEMIOCTREE_SANITIZED") != nullptr;
-}
+using semioctree::testing::sanitized;
 
 json read_json(const fs::path& p) {
   return json::parse(testing::slurp(p.string()));

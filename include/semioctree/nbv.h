@@ -3,6 +3,8 @@
 #pragma once
 
 #include "semioctree/nbv/candidates.h"
+#include "semioctree/nbv/overlap.h"
 #include "semioctree/nbv/params.h"
 #include "semioctree/nbv/room.h"
+#include "semioctree/nbv/rooms.h"
 #include "semioctree/nbv/scoring.h"

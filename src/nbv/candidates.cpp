@@ -21,30 +21,8 @@ using nbv_detail::blind_octant;
 using nbv_detail::coarse_columns;
 using nbv_detail::flood_fill_4;
 using nbv_detail::free_space;
-
-// The 2-D grid of leaf cells over the map's coarse columns, with a border of
-// one cell; cell (x, y) is leaf column (x + x0, y + y0) (key − kKeyOrigin).
-struct Plane {
-  CoarseIndex lo, hi;  // the coarse columns (coarse_columns)
-  std::int64_t x0 = 0, y0 = 0;
-  int nx = 0, ny = 0;
-  std::size_t index(int x, int y) const {
-    return std::size_t(y) * std::size_t(nx) + std::size_t(x);
-  }
-  std::size_t cells() const { return std::size_t(nx) * std::size_t(ny); }
-};
-
-Plane plane_over(const SemiOcTree& tree) {
-  const std::int64_t span = std::int64_t(1) << tree.leaf_level();
-  const std::pair<CoarseIndex, CoarseIndex> columns = coarse_columns(tree);
-  const CoarseIndex &lo = columns.first, &hi = columns.second;
-  Plane p;
-  p.lo = lo, p.hi = hi;
-  p.x0 = std::int64_t(lo.x) * span - 1, p.y0 = std::int64_t(lo.y) * span - 1;
-  p.nx = static_cast<int>((std::int64_t(hi.x) - lo.x + 1) * span + 2);
-  p.ny = static_cast<int>((std::int64_t(hi.y) - lo.y + 1) * span + 2);
-  return p;
-}
+using nbv_detail::Plane;
+using nbv_detail::plane_over;
 
 // Key of a leaf cell, packed for a hash set.
 std::uint64_t packed_cell(const octomap::OcTreeKey& k) {

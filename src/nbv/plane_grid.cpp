@@ -15,4 +15,16 @@ std::pair<CoarseIndex, CoarseIndex> coarse_columns(const SemiOcTree& tree) {
   return {lo, hi};
 }
 
+Plane plane_over(const SemiOcTree& tree) {
+  const std::int64_t span = std::int64_t(1) << tree.leaf_level();
+  const std::pair<CoarseIndex, CoarseIndex> columns = coarse_columns(tree);
+  const CoarseIndex &lo = columns.first, &hi = columns.second;
+  Plane p;
+  p.lo = lo, p.hi = hi;
+  p.x0 = std::int64_t(lo.x) * span - 1, p.y0 = std::int64_t(lo.y) * span - 1;
+  p.nx = static_cast<int>((std::int64_t(hi.x) - lo.x + 1) * span + 2);
+  p.ny = static_cast<int>((std::int64_t(hi.y) - lo.y + 1) * span + 2);
+  return p;
+}
+
 }  // namespace semioctree::nbv_detail

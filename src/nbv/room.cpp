@@ -9,9 +9,11 @@
 
 namespace semioctree {
 
-using nbv_detail::coarse_columns;
+using nbv_detail::cells_at_height;
 using nbv_detail::flood_fill_4;
 using nbv_detail::free_space;
+using nbv_detail::Plane;
+using nbv_detail::plane_over;
 
 bool RoomBox::contains(const Point3& p) const {
   return p.x >= min.x && p.x <= max.x && p.y >= min.y && p.y <= max.y && p.z >= min.z &&
@@ -30,26 +32,10 @@ std::optional<RoomBox> room_box(const SemiOcTree& tree, const std::vector<Point3
                                 double height, double floor_z, double ceiling_z) {
   if (tree.coarse_count() == 0 || !(ceiling_z > floor_z)) return std::nullopt;
   const double r = tree.leaf_size();
-  const unsigned k = tree.leaf_level();
-  const std::int64_t span = std::int64_t(1) << k;
-  // Leaf cells of the plane over the map's coarse columns (1: free); cell (x, y)
-  // is key (x + x0, y + y0) − kKeyOrigin.
-  const std::pair<CoarseIndex, CoarseIndex> columns = coarse_columns(tree);
-  const CoarseIndex &lo = columns.first, &hi = columns.second;
-  const std::int64_t x0 = std::int64_t(lo.x) * span, y0 = std::int64_t(lo.y) * span;
-  const std::int64_t nx = (std::int64_t(hi.x) - lo.x + 1) * span;
-  const std::int64_t ny = (std::int64_t(hi.y) - lo.y + 1) * span;
-  std::vector<std::uint8_t> free_cell(std::size_t(nx * ny), 0);
-  auto idx = [&](std::int64_t x, std::int64_t y) { return std::size_t(y * nx + x); };
-  tree.for_each_octant([&](const Octant& o) {
-    const double h = 0.5 * o.size;
-    if (!free_space(o.label()) || height < o.center.z - h || height >= o.center.z + h) return;
-    const std::int64_t size = std::int64_t(1) << (k - o.level);
-    const std::int64_t cx = leaf_cell(o.key.k[0]) - x0;
-    const std::int64_t cy = leaf_cell(o.key.k[1]) - y0;
-    for (std::int64_t y = cy; y < cy + size; ++y)
-      for (std::int64_t x = cx; x < cx + size; ++x) free_cell[idx(x, y)] = 1;
-  });
+  const Plane plane = plane_over(tree);
+  const std::int64_t x0 = plane.x0, y0 = plane.y0, nx = plane.nx, ny = plane.ny;
+  const std::vector<std::uint8_t> free_cell = cells_at_height(tree, plane, height, free_space);
+  auto idx = [&](std::int64_t x, std::int64_t y) { return plane.index(int(x), int(y)); };
   // Seeds: the free cells within kSeedRadius of each scanner. Its own cell is
   // not free until another scan sees it: the blind zone (minimum range) around
   // a scanner is occluded.

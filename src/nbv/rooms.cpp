@@ -1,0 +1,99 @@
+#include "semioctree/nbv/rooms.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "label_roles.h"
+#include "plane_grid.h"
+
+namespace semioctree {
+
+using nbv_detail::cells_at_height;
+using nbv_detail::free_space;
+using nbv_detail::Plane;
+using nbv_detail::plane_over;
+
+namespace {
+
+// How far from an opening's centre its rooms are looked for, each way: past the wall's
+// thickness (and the leaf of unseen space often left in front of it).
+constexpr double kOpeningReach = 0.5;  // m
+
+}  // namespace
+
+std::optional<std::size_t> RoomMap::room_at(const Point3& p) const {
+  if (room_of_.empty()) return std::nullopt;
+  const std::int64_t x = std::int64_t(std::floor(p.x / leaf_)) - x0_;
+  const std::int64_t y = std::int64_t(std::floor(p.y / leaf_)) - y0_;
+  if (x < 0 || y < 0 || x >= nx_ || y >= ny_) return std::nullopt;
+  const std::int32_t id = room_of_[std::size_t(y) * std::size_t(nx_) + std::size_t(x)];
+  if (id < 0) return std::nullopt;
+  return std::size_t(id);
+}
+
+RoomMap segment_rooms(const SemiOcTree& tree, double height, double floor_z, double ceiling_z,
+                      const std::vector<DetectedOpening>& openings) {
+  RoomMap m;
+  if (tree.coarse_count() == 0) return m;
+  const double r = tree.leaf_size();
+  const Plane plane = plane_over(tree);
+  m.leaf_ = r, m.x0_ = plane.x0, m.y0_ = plane.y0, m.nx_ = plane.nx, m.ny_ = plane.ny;
+  const std::vector<std::uint8_t> free_cell = cells_at_height(
+      tree, plane, height, [](Label l) { return free_space(l) || l == Label::kOut; });
+  m.room_of_.assign(plane.cells(), -1);
+  std::vector<std::size_t> stack;
+  for (int y = 0; y < plane.ny; ++y)
+    for (int x = 0; x < plane.nx; ++x) {
+      const std::size_t start = plane.index(x, y);
+      if (!free_cell[start] || m.room_of_[start] >= 0) continue;
+      const auto id = std::int32_t(m.rooms_.size());
+      Room room;
+      room.min = Point3(double(x + plane.x0) * r, double(y + plane.y0) * r, floor_z);
+      room.max = Point3(room.min.x + r, room.min.y + r, ceiling_z);
+      m.room_of_[start] = id;
+      stack.push_back(start);
+      while (!stack.empty()) {
+        const std::size_t i = stack.back();
+        stack.pop_back();
+        ++room.cells;
+        const int cx = int(i % std::size_t(plane.nx)), cy = int(i / std::size_t(plane.nx));
+        room.min.x = std::min(room.min.x, double(cx + plane.x0) * r);
+        room.min.y = std::min(room.min.y, double(cy + plane.y0) * r);
+        room.max.x = std::max(room.max.x, double(cx + plane.x0 + 1) * r);
+        room.max.y = std::max(room.max.y, double(cy + plane.y0 + 1) * r);
+        // The plane's border cells are never free: no bounds checks needed.
+        for (const std::size_t j :
+             {i + 1, i - 1, i + std::size_t(plane.nx), i - std::size_t(plane.nx)})
+          if (free_cell[j] && m.room_of_[j] < 0) {
+            m.room_of_[j] = id;
+            stack.push_back(j);
+          }
+      }
+      room.area_m2 = double(room.cells) * r * r;
+      m.rooms_.push_back(room);
+    }
+
+  const int steps = int(std::ceil(kOpeningReach / r));
+  for (std::size_t i = 0; i < openings.size(); ++i) {
+    const DetectedOpening& o = openings[i];
+    const Eigen::Vector3d c = 0.25 * (o.corners[0] + o.corners[1] + o.corners[2] + o.corners[3]);
+    OpeningLink link;
+    link.opening = i;
+    for (const int side : {1, -1}) {
+      std::optional<std::size_t> found;
+      for (int s = 1; s <= steps && !found; ++s) {
+        const Eigen::Vector3d p = c + double(side * s) * r * o.wall_normal;
+        found = m.room_at(Point3(p.x(), p.y(), height));
+      }
+      (side > 0 ? link.front : link.back) = found;
+      if (found) {
+        std::vector<std::size_t>& list = m.rooms_[*found].openings;
+        if (std::find(list.begin(), list.end(), i) == list.end()) list.push_back(i);
+      }
+    }
+    m.links_.push_back(link);
+  }
+  return m;
+}
+
+}  // namespace semioctree
