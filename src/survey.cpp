@@ -273,10 +273,22 @@ double Survey::predicted_overlap_at(const Point3& position) const {
       .share;
 }
 
+std::optional<double> Survey::path_between(const Point3& from, const Point3& to) const {
+  NbvParams nbv = params_.nbv;
+  nbv.grid_anchor = map_.scanners().front();
+  std::vector<double> path_m;
+  const std::vector<Point3> positions =
+      find_candidates(map_.tree(), params_.robot, from, map_.scanners(), nbv, nullptr, &path_m);
+  for (std::size_t i = 0; i < positions.size(); ++i)
+    if (positions[i].x == to.x && positions[i].y == to.y) return path_m[i];
+  return std::nullopt;
+}
+
 SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
   SurveyOutcome out;
   std::optional<Point3> target;         // where the platform was sent (none: the first scan)
   std::optional<double> predicted;      // the overlap predicted there
+  std::optional<double> path;           // the robot's path there
   std::vector<Point3> failed_in_a_row;  // where the scans since the last placed one failed
   for (std::size_t i = records_.size(); i < params_.max_scans;) {
     const IncomingScan in = platform.scan();
@@ -289,6 +301,7 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
       f.after_scan = records_.empty() ? 0 : records_.back().index;
       f.position = target.value_or(Point3());
       f.error = e.what();
+      f.path_m = path;
       if (target) failed_in_a_row.push_back(*target);
       // Halfway back to the last placed scan, then a quarter of the way, ...
       if (target && !records_.empty() && failed_in_a_row.size() <= params_.max_recoveries)
@@ -301,6 +314,7 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
         out.error = e.what();
         return out;
       }
+      path = path_between(*target, *f.retry);
       platform.move_to(*f.retry);
       target = f.retry;
       predicted = predicted_overlap_at(*f.retry);
@@ -310,6 +324,7 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
     failed_in_a_row.clear();
     ++i;
     records_.back().predicted_overlap = predicted;
+    records_.back().path_m = path;
     const ScanRecord& rec = records_.back();
     platform.placed(rec.scanner_to_survey);
     observer_->scan_done(rec, map_);
@@ -329,6 +344,9 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
                                rec.nbv.best->position.x == next.position.x &&
                                rec.nbv.best->position.y == next.position.y;
     predicted = nbv_predicted ? rec.nbv.best_overlap->share : predicted_overlap_at(next.position);
+    path.reset();
+    for (const NbvCandidate& c : rec.nbv.candidates)
+      if (c.position.x == next.position.x && c.position.y == next.position.y) path = c.path_m;
     observer_->moved(rec, next, policy);
   }
   out.stopped_because = StopReason::kMaxScans;

@@ -282,6 +282,45 @@ TEST(Nbv, UnreachablePocketOfFreeFloorGivesNoCandidates) {
   EXPECT_FALSE(rep.robot_in_map);
 }
 
+// Each candidate's path from the robot: in an open room about the straight line
+// (within the 8 % an 8-connected grid adds at worst, and the half leaves between the
+// robot's cell centre and the robot); behind a partition, around its end.
+TEST(Nbv, CandidatePathsGoAroundObstacles) {
+  Map m(6, 5, 3);
+  m.walls(4.8, 4.0, 2.4);
+  NbvParams p;
+  p.candidate_spacing = 0.2;
+  RobotGeometry robot;
+  robot.radius = 0.3;
+  const Point3 start(1.0, 1.0, 0);
+  std::vector<double> open_path;
+  const std::vector<Point3> open = find_candidates(m.t, robot, start, {}, p, nullptr, &open_path);
+  ASSERT_EQ(open.size(), open_path.size());
+  ASSERT_GT(open.size(), 50u);
+  const double slack = kLeaf;  // the robot's cell centre is up to a leaf·√2/2 off
+  for (std::size_t i = 0; i < open.size(); ++i) {
+    const double line = std::hypot(open[i].x - start.x, open[i].y - start.y);
+    EXPECT_GE(open_path[i], line - slack) << open[i].x << ", " << open[i].y;
+    EXPECT_LE(open_path[i], 1.0824 * line + slack) << open[i].x << ", " << open[i].y;
+  }
+  // A full-height partition at x ∈ [2.4, 2.45) from y = 0 to 3.0: the robot at x = 1 must
+  // go round its end (y > 3.0 + radius) to reach x = 3.6.
+  m.leaves({2.4, 0, 0}, {2.45, 3.0, 2.4}, Label::kOccupied);
+  std::vector<double> path;
+  const std::vector<Point3> behind = find_candidates(m.t, robot, start, {}, p, nullptr, &path);
+  bool checked = false;
+  for (std::size_t i = 0; i < behind.size(); ++i) {
+    const Point3& c = behind[i];
+    if (c.x < 3.5 || c.y > 1.5) continue;  // behind the partition, low down
+    // At least up to the end of the partition (clear of it by the radius) and back down.
+    const double round_end = std::hypot(2.425 - start.x, 3.0 + robot.radius - start.y) +
+                             std::hypot(c.x - 2.425, 3.0 + robot.radius - c.y);
+    EXPECT_GE(path[i], round_end - 2 * slack) << c.x << ", " << c.y;
+    checked = true;
+  }
+  EXPECT_TRUE(checked);
+}
+
 TEST(Nbv, BlindZoneUnderPastScansIsNotAnObstacle) {
   const auto tree = discretize(room_with_pillar(), 2.4, {0.05, 0.8});
   const Point3 scan(1.0, 2.0, 1.5);

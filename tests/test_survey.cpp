@@ -266,6 +266,27 @@ TEST(Survey, WritesEveryOutputWithTheDocumentedSchema) {
     peak = s["peak_rss_mib"].get<double>();
   }
   EXPECT_GE(j["peak_rss_mib"].get<double>(), peak);
+  // The path: none to the first scan; to the second, at least the straight line between
+  // them (up to the candidate grid's leaf and the registration's few cm), and the
+  // survey's total is the sum; the predicted overlap beside registration's.
+  EXPECT_TRUE(j["scans"][0]["path_m"].is_null());
+  EXPECT_TRUE(j["scans"][0]["predicted_overlap"].is_null());
+  EXPECT_TRUE(j["registration_failures"].is_array());
+  double path = 0;
+  for (std::size_t i = 1; i < j["scans"].size(); ++i) {
+    const json &a = j["scans"][i - 1]["pose"], &b = j["scans"][i]["pose"];
+    const double line = std::hypot(b["x"].get<double>() - a["x"].get<double>(),
+                                   b["y"].get<double>() - a["y"].get<double>());
+    EXPECT_GE(j["scans"][i]["path_m"].get<double>(), line - 0.1);
+    EXPECT_DOUBLE_EQ(j["scans"][i]["path_m"].get<double>(),
+                     j["scans"][i - 1]["nbv"]["path_m"].get<double>());
+    path += j["scans"][i]["path_m"].get<double>();
+    const double predicted = j["scans"][i]["predicted_overlap"].get<double>();
+    EXPECT_GT(predicted, 0.0);
+    EXPECT_LE(predicted, 1.0);
+    EXPECT_DOUBLE_EQ(predicted, j["scans"][i - 1]["nbv"]["predicted_overlap"].get<double>());
+  }
+  EXPECT_NEAR(j["path_m"].get<double>(), path, 1e-9);
   for (const json& s : j["scans"]) {
     for (const char* k : {"index", "pose", "true_pose", "points_raw", "points_kept", "octants",
                           "volume_percent", "stop_percent", "nbv", "seconds", "ceiling_found",

@@ -371,7 +371,7 @@ TEST(SurveyStage, AScannerThatCannotSeeTheCeilingSurveysTheRoom) {
 TEST(SurveyStage, RandomPolicyDrawsAmongTheCandidatesReproducibly) {
   ScanRecord r;
   for (int i = 0; i < 7; ++i)
-    r.nbv.candidates.push_back({Point3(i, 2 * i, 1.5), double(i), std::nullopt});
+    r.nbv.candidates.push_back({Point3(i, 2 * i, 1.5), double(i), 0.0, std::nullopt});
   const SurveyMap map{SurveyMapParams{}};
   RandomCandidatePolicy a(5), b(5), c(6);
   bool differs = false;

@@ -98,6 +98,10 @@ struct ScanRecord {
   // chosen (predict_overlap, as the NBV predicts it), to set beside registration's
   // overlap; none for the first scan.
   std::optional<double> predicted_overlap;
+  // Survey::run: the robot's path to this scan's position from where it stood (the scan
+  // before, or a scan that could not be registered), over the cells its safety cylinder
+  // clears (NbvCandidate::path_m); none for the first scan.
+  std::optional<double> path_m;
   struct Seconds {
     double preprocess = 0, registration = 0, occupancy = 0, openings = 0, occlusion = 0, nbv = 0,
            total = 0;
@@ -152,7 +156,8 @@ struct RegistrationFailure {
   std::size_t after_scan = 0;  // index of the last placed scan before it
   Point3 position;             // where the failed scan was asked for (survey frame)
   std::string error;
-  std::optional<Point3> retry;  // the recovery position; none: the survey ended
+  std::optional<Point3> retry;   // the recovery position; none: the survey ended
+  std::optional<double> path_m;  // the robot's path to `position` (as ScanRecord::path_m)
 };
 
 // Where the scans come from and how the scanner moves.
@@ -242,6 +247,9 @@ class Survey {
   // The overlap a scan at `position` is predicted to have with the map (as the NBV's
   // candidates are judged).
   double predicted_overlap_at(const Point3& position) const;
+  // The robot's path from `from` to `to` (a candidate of the last scan), m; none if `to`
+  // is no candidate from there.
+  std::optional<double> path_between(const Point3& from, const Point3& to) const;
 
   SurveyParams params_;
   SurveyObserver* observer_;

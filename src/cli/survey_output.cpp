@@ -141,9 +141,10 @@ void SurveyOutput::stage_done(SurveyStage stage, const ScanRecord& s) {
       if (nbv.best) {
         std::printf(
             "  nbv: %zu feasible candidates, %zu occluded targets; best (%.3f, %.3f) score "
-            "%.1f, stop %.3f %% [%.2f s]\n",
+            "%.1f, %.2f m away by path, stop %.3f %% [%.2f s]\n",
             nbv.candidate_report.feasible, nbv.scoring.targets, nbv.best->position.x,
-            nbv.best->position.y, nbv.best->score, nbv.stop_percent, s.seconds.nbv);
+            nbv.best->position.y, nbv.best->score, nbv.best->path_m, nbv.stop_percent,
+            s.seconds.nbv);
         if (nbv.best_overlap)
           std::printf("  nbv: predicted overlap %.0f %% (%.0f %% of the rays)%s [%.2f s]\n",
                       100 * nbv.best_overlap->share, 100 * nbv.best_overlap->unweighted_share,
@@ -217,6 +218,8 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
   r["candidates"] = s.nbv.candidate_report.feasible;
   r["candidates_low_overlap"] = s.nbv.low_overlap;
   r["predicted_overlap"] = s.predicted_overlap ? json(*s.predicted_overlap) : json(nullptr);
+  r["path_m"] = s.path_m ? json(*s.path_m) : json(nullptr);
+  if (best) r["nbv"]["path_m"] = best->path_m;
   r["occluded_targets"] = s.nbv.scoring.targets;
   if (s.room)  // where targets and Eq 5 were counted (null: the whole map)
     r["room"] = {{"min", {s.room->min.x, s.room->min.y, s.room->min.z}},
@@ -275,7 +278,8 @@ void SurveyOutput::registration_failed(const RegistrationFailure& f) {
   json r = {{"after_scan", f.after_scan},
             {"position", {f.position.x, f.position.y}},
             {"error", f.error},
-            {"retry", f.retry ? json{f.retry->x, f.retry->y} : json(nullptr)}};
+            {"retry", f.retry ? json{f.retry->x, f.retry->y} : json(nullptr)},
+            {"path_m", f.path_m ? json(*f.path_m) : json(nullptr)}};
   failures_.push_back(r);
   if (f.retry)
     std::printf(
@@ -297,6 +301,12 @@ void SurveyOutput::write_survey_json(const std::string& stopped_because, const j
                           {"width", op.width},
                           {"height", op.height}});
     }
+  // The robot's planned path over the whole survey: to every scan, failed ones too.
+  double path_m = 0;
+  for (const json& r : records_)
+    if (r["path_m"].is_number()) path_m += r["path_m"].get<double>();
+  for (const json& f : failures_)
+    if (f["path_m"].is_number()) path_m += f["path_m"].get<double>();
   json j = {{"format", "semioctree-survey"},
             {"version", 1},
             {"leaf", params_.map.grid.leaf},
@@ -316,6 +326,7 @@ void SurveyOutput::write_survey_json(const std::string& stopped_because, const j
             {"complete", stopped_because == "stop_percentage"},
             {"scans", records_},
             {"registration_failures", failures_},
+            {"path_m", path_m},
             {"openings", openings},
             {"peak_rss_mib", peak_resident_mib()}};
   for (const auto& [k, v] : extra.items()) j[k] = v;

@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
+#include <limits>
+#include <queue>
 #include <stdexcept>
 #include <unordered_set>
 #include <utility>
@@ -19,7 +22,6 @@ namespace {
 
 using nbv_detail::blind_octant;
 using nbv_detail::coarse_columns;
-using nbv_detail::flood_fill_4;
 using nbv_detail::free_space;
 using nbv_detail::Plane;
 using nbv_detail::plane_over;
@@ -199,21 +201,49 @@ std::vector<std::uint8_t> clear_cells(const std::vector<std::uint8_t>& obstacle,
   return clear;
 }
 
-// 1 for each cell 4-connected to the robot's cell through clear cells (the
-// robot's own cell always counts); all 0 when the robot stands outside the map.
-std::vector<std::uint8_t> reachable_cells(const SemiOcTree& tree, const Plane& plane,
-                                          const Point3& robot_position,
-                                          const std::vector<std::uint8_t>& clear,
-                                          CandidateReport& rep) {
+// The length of the shortest path from the robot's cell to each cell through clear
+// cells (the robot's own cell always counts), in cells: steps to the 8 neighbours, a
+// diagonal one only when both cells beside it are clear (the robot does not cut a
+// corner), so the cells reached are those 4-connected to the robot's. Infinity for the
+// others, and everywhere when the robot stands outside the map.
+std::vector<float> path_lengths(const SemiOcTree& tree, const Plane& plane,
+                                const Point3& robot_position,
+                                const std::vector<std::uint8_t>& clear, CandidateReport& rep) {
+  constexpr float kNone = std::numeric_limits<float>::infinity();
+  std::vector<float> dist(clear.size(), kNone);
   octomap::OcTreeKey rk;
-  if (!tree.key_of(robot_position, rk)) return std::vector<std::uint8_t>(clear.size(), 0);
+  if (!tree.key_of(robot_position, rk)) return dist;
   const std::int64_t rx = leaf_cell(rk.k[0]) - plane.x0;
   const std::int64_t ry = leaf_cell(rk.k[1]) - plane.y0;
-  if (!(rx > 0 && ry > 0 && rx < plane.nx - 1 && ry < plane.ny - 1))
-    return std::vector<std::uint8_t>(clear.size(), 0);
+  if (!(rx > 0 && ry > 0 && rx < plane.nx - 1 && ry < plane.ny - 1)) return dist;
   rep.robot_in_map = true;
-  return flood_fill_4(std::size_t(plane.nx), std::size_t(plane.ny), {plane.index(int(rx), int(ry))},
-                      [&](std::size_t j) { return clear[j] != 0; });
+  using Item = std::pair<float, std::size_t>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
+  const std::size_t start = plane.index(int(rx), int(ry));
+  dist[start] = 0;
+  queue.push({0.0f, start});
+  const auto nx = std::ptrdiff_t(plane.nx);
+  const float diagonal = float(std::sqrt(2.0));
+  while (!queue.empty()) {
+    const auto [d, i] = queue.top();
+    queue.pop();
+    if (d > dist[i]) continue;
+    const auto step = [&](std::ptrdiff_t offset, float length) {
+      const std::size_t j = std::size_t(std::ptrdiff_t(i) + offset);
+      if (!clear[j] || d + length >= dist[j]) return;
+      dist[j] = d + length;
+      queue.push({dist[j], j});
+    };
+    // The border cells are never clear: no neighbour lies off the plane.
+    const bool e = clear[i + 1], w = clear[i - 1], n = clear[std::size_t(std::ptrdiff_t(i) + nx)],
+               s = clear[std::size_t(std::ptrdiff_t(i) - nx)];
+    step(1, 1.0f), step(-1, 1.0f), step(nx, 1.0f), step(-nx, 1.0f);
+    if (e && n) step(nx + 1, diagonal);
+    if (w && n) step(nx - 1, diagonal);
+    if (e && s) step(-nx + 1, diagonal);
+    if (w && s) step(-nx - 1, diagonal);
+  }
+  return dist;
 }
 
 }  // namespace
@@ -234,9 +264,10 @@ PlatformBody platform_body(const RobotGeometry& robot, double leaf_size) {
 std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry& robot,
                                     const Point3& robot_position,
                                     const std::vector<Point3>& past_scans, const NbvParams& params,
-                                    CandidateReport* report) {
+                                    CandidateReport* report, std::vector<double>* path_m) {
   CandidateReport rep;
   std::vector<Point3> out;
+  if (path_m) path_m->clear();
   if (report) *report = rep;
   if (tree.coarse_count() == 0) return out;
   if (!(robot.radius >= 0) || !(robot.scanner_height > 0) || !(robot.top() > 0))
@@ -247,8 +278,7 @@ std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry&
   const std::vector<std::uint8_t> obstacle =
       obstacle_columns(tree, plane, robot, past_scans, params, rep);
   const std::vector<std::uint8_t> clear = clear_cells(obstacle, plane, robot.radius, r);
-  const std::vector<std::uint8_t> reached =
-      reachable_cells(tree, plane, robot_position, clear, rep);
+  const std::vector<float> path = path_lengths(tree, plane, robot_position, clear, rep);
 
   // The candidate grid: every m-th leaf cell (world-aligned), at its centre.
   const std::int64_t m = std::max<std::int64_t>(1, std::llround(params.candidate_spacing / r));
@@ -280,7 +310,7 @@ std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry&
         ++rep.cylinder_blocked;
         continue;
       }
-      if (!reached[i]) {
+      if (!std::isfinite(path[i])) {
         ++rep.unreachable;
         continue;
       }
@@ -293,6 +323,7 @@ std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry&
       }
       ++rep.feasible;
       out.push_back(p);
+      if (path_m) path_m->push_back(double(path[i]) * r);
     }
   }
   if (report) *report = rep;

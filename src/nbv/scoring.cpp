@@ -137,15 +137,16 @@ NbvResult next_best_view(const SemiOcTree& tree, const RobotGeometry& robot,
                          const NbvParams& params) {
   NbvResult res;
   auto t0 = Clock::now();
-  const std::vector<Point3> positions =
-      find_candidates(tree, robot, robot_position, past_scans, params, &res.candidate_report);
+  std::vector<double> path_m;
+  const std::vector<Point3> positions = find_candidates(tree, robot, robot_position, past_scans,
+                                                        params, &res.candidate_report, &path_m);
   res.seconds_candidates = seconds_since(t0);
   t0 = Clock::now();
   const std::vector<Target> targets = targets_for(tree, params);
   const std::vector<double> scores = score_targets(tree, targets, positions, params, &res.scoring);
   res.candidates.reserve(positions.size());
   for (std::size_t i = 0; i < positions.size(); ++i)
-    res.candidates.push_back({positions[i], scores[i], std::nullopt});
+    res.candidates.push_back({positions[i], scores[i], path_m[i], std::nullopt});
   res.seconds_scoring = seconds_since(t0);
   t0 = Clock::now();
   // Best score first (grid order on ties); with a prediction, the first whose scan is

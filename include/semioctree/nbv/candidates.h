@@ -47,11 +47,15 @@ PlatformBody platform_body(const RobotGeometry& robot, double leaf_size);
 // point within a leaf of one is no candidate: in a static scene a scan from there would
 // see again what that scan saw, whatever the scoring's targets say). Uses
 // candidate_spacing, grid_anchor, limits and blind_zone_is_free of `params`.
-// Throws std::invalid_argument for a radius < 0 or a scanner height <= 0, or
-// a grid anchor beyond the key range.
+// `path_m` (if given) gets each candidate's shortest path from the robot over the
+// cells its safety cylinder clears, m: steps between leaf cells, diagonal ones only
+// where the robot does not cut a corner (docs/nbv.md, "Path"). Throws
+// std::invalid_argument for a radius < 0 or a scanner height <= 0, or a grid anchor
+// beyond the key range.
 std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry& robot,
                                     const Point3& robot_position,
                                     const std::vector<Point3>& past_scans, const NbvParams& params,
-                                    CandidateReport* report = nullptr);
+                                    CandidateReport* report = nullptr,
+                                    std::vector<double>* path_m = nullptr);
 
 }  // namespace semioctree

@@ -21,6 +21,7 @@ struct NbvCandidate {
   // m³), method 2 level-ℓ cells, method 3 m² of frontier faces. Compare scores of
   // one method only.
   double score = 0;
+  double path_m = 0;  // the robot's shortest path there (find_candidates), m
   // Predicted overlap (NbvParams::overlap_top): set on the candidates tried, best first.
   std::optional<double> predicted_overlap;
 };
