@@ -225,7 +225,8 @@ std::vector<float> path_lengths(const SemiOcTree& tree, const Plane& plane,
   const auto nx = std::ptrdiff_t(plane.nx);
   const float diagonal = float(std::sqrt(2.0));
   while (!queue.empty()) {
-    const auto [d, i] = queue.top();
+    const float d = queue.top().first;
+    const std::size_t i = queue.top().second;
     queue.pop();
     if (d > dist[i]) continue;
     const auto step = [&](std::ptrdiff_t offset, float length) {
