@@ -256,12 +256,12 @@ std::optional<Point3> recovery_position(const ScanRecord& last, const Point3& fa
   double nearest_tried = std::numeric_limits<double>::infinity();
   for (const Point3& t : tried) nearest_tried = std::min(nearest_tried, planar_distance(t, from));
   std::optional<Point3> best;
-  double best_d2 = 0;
+  double best_d = 0;
   for (const NbvCandidate& c : last.nbv.candidates) {
     const Point3& p = c.position;
     if (planar_distance(p, from) >= nearest_tried) continue;
-    const double d2 = (p.x - x) * (p.x - x) + (p.y - y) * (p.y - y);
-    if (!best || d2 < best_d2) best = p, best_d2 = d2;
+    const double d = planar_distance(p, Point3(x, y, 0));
+    if (!best || d < best_d) best = p, best_d = d;
   }
   return best;
 }
@@ -340,13 +340,15 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
     const NextScanChoice next = policy.choose(rec, map_);
     platform.move_to(next.position);
     target = next.position;
-    const bool nbv_predicted = rec.nbv.best && rec.nbv.best_overlap &&
-                               rec.nbv.best->position.x == next.position.x &&
-                               rec.nbv.best->position.y == next.position.y;
-    predicted = nbv_predicted ? rec.nbv.best_overlap->share : predicted_overlap_at(next.position);
-    path.reset();
-    for (const NbvCandidate& c : rec.nbv.candidates)
-      if (c.position.x == next.position.x && c.position.y == next.position.y) path = c.path_m;
+    // The chosen candidate's prediction (the NBV's was made while choosing it) and path.
+    const auto chosen = std::find_if(
+        rec.nbv.candidates.begin(), rec.nbv.candidates.end(), [&](const NbvCandidate& c) {
+          return c.position.x == next.position.x && c.position.y == next.position.y;
+        });
+    const bool known = chosen != rec.nbv.candidates.end();
+    predicted = known && chosen->predicted_overlap ? *chosen->predicted_overlap
+                                                   : predicted_overlap_at(next.position);
+    path = known ? std::optional<double>(chosen->path_m) : std::nullopt;
     observer_->moved(rec, next, policy);
   }
   out.stopped_because = StopReason::kMaxScans;
