@@ -267,10 +267,9 @@ std::optional<Point3> recovery_position(const ScanRecord& last, const Point3& fa
 }
 
 double Survey::predicted_overlap_at(const Point3& position) const {
-  return predict_overlap(map_.tree(), position, params_.nbv.limits, 0.0, map_.ceiling_height(),
-                         2 * map_.tree().leaf_size(), params_.nbv.overlap_ray_step_deg,
-                         params_.nbv.threads)
-      .share;
+  NbvParams nbv = params_.nbv;
+  nbv.overlap_top = map_.ceiling_height();
+  return predict_overlap(map_.tree(), position, nbv).share;
 }
 
 std::optional<double> Survey::path_between(const Point3& from, const Point3& to) const {

@@ -124,4 +124,12 @@ OverlapPrediction predict_overlap(const SemiOcTree& tree, const Point3& scanner,
   return p;
 }
 
+OverlapPrediction predict_overlap(const SemiOcTree& tree, const Point3& scanner,
+                                  const NbvParams& params) {
+  if (!params.overlap_top)
+    throw std::invalid_argument("predict_overlap: NbvParams::overlap_top is not set");
+  return predict_overlap(tree, scanner, params.limits, 0.0, *params.overlap_top,
+                         2 * tree.leaf_size(), params.overlap_ray_step_deg, params.threads);
+}
+
 }  // namespace semioctree

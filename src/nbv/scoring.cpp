@@ -162,9 +162,7 @@ NbvResult next_best_view(const SemiOcTree& tree, const RobotGeometry& robot,
     NbvCandidate& c = res.candidates[i];
     if (res.low_overlap > 0 && c.score <= 0) break;
     if (params.overlap_top && c.score > 0) {
-      const OverlapPrediction p =
-          predict_overlap(tree, c.position, params.limits, 0.0, *params.overlap_top,
-                          2 * tree.leaf_size(), params.overlap_ray_step_deg, params.threads);
+      const OverlapPrediction p = predict_overlap(tree, c.position, params);
       c.predicted_overlap = p.share;
       if (p.share < params.min_overlap) {
         ++res.low_overlap;

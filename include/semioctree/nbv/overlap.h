@@ -5,6 +5,7 @@
 
 #include <cstddef>
 
+#include "semioctree/nbv/params.h"
 #include "semioctree/occlusion.h"
 #include "semioctree/octomap_ext/semioctree.h"
 
@@ -38,5 +39,11 @@ struct OverlapPrediction {
 OverlapPrediction predict_overlap(const SemiOcTree& tree, const Point3& scanner,
                                   const ScannerView& limits, double floor_z, double top_z,
                                   double tolerance, double step_deg = 1.5, unsigned threads = 0);
+
+// The prediction the NBV makes with `params` (NbvParams::overlap_top must be set): the
+// band from the floor (z = 0) to overlap_top, a tolerance of two leaves, the params'
+// ray step, scanner limits and threads. Throws std::invalid_argument without overlap_top.
+OverlapPrediction predict_overlap(const SemiOcTree& tree, const Point3& scanner,
+                                  const NbvParams& params);
 
 }  // namespace semioctree
