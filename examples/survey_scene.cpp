@@ -37,6 +37,7 @@ int main(int argc, char** argv) {
     params.max_scans = argc > 2 ? std::strtoul(argv[2], nullptr, 10) : 10;
 
     sim_platform::SimulatedPlatform robot(scene, /*seed=*/1, /*threads=*/0);
+    params.may_stand = robot.survey_area_rule();  // the scene's survey_area, if it has one
     BestScorePolicy next_best_view;
     PrintEachScan printer;
     Survey survey(params, &printer);

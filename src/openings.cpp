@@ -90,11 +90,27 @@ struct WallFrame {
   }
 };
 
+// How many of the columns c0..c1 have an occupied cell in rows r0..r1 - 1: wall around
+// a hole. Where two walls stand in line across a corridor, the corridor is a hole in
+// their common plane with nothing above or below it but stray points.
+int columns_with_wall(const WallGrid& g, int c0, int c1, int r0, int r1) {
+  int n = 0;
+  for (int c = c0; c <= c1; ++c)
+    for (int r = std::max(0, r0); r < std::min(g.rows, r1); ++r)
+      if (g.occ(c, r)) {
+        ++n;
+        break;
+      }
+  return n;
+}
+
 // Every maximal rectangle of empty cells (no side can grow by a whole row or
 // column of empty cells) that does not touch the ends of the wall segment, kept
 // when its size fits a door or a window. Maximality is what makes a hole's
 // rectangle its full extent; enclosure by wall cells on the left, right and top
-// is what separates a hole from the space beyond the end of a wall.
+// is what separates a hole from the space beyond the end of a wall, and wall over
+// most of its columns (under them too, for a window) from the gap between two walls
+// in line (columns_with_wall).
 std::vector<CellRect> find_hole_candidates(const WallGrid& g, double ceiling,
                                            const OpeningParams& p) {
   std::vector<CellRect> out;
@@ -130,13 +146,18 @@ std::vector<CellRect> find_hole_candidates(const WallGrid& g, double ceiling,
         const double width = (b - a + 1) * g.cell;
         const double bottom = r0 * g.cell;
         const double top = (r1 + 1) * g.cell;
-        const bool door = bottom <= p.floor_tolerance + eps && width + eps >= p.door_min_width &&
-                          width <= p.door_max_width + eps && top + eps >= p.door_min_height &&
-                          top <= p.door_max_height + eps && top <= ceiling - p.min_lintel + eps;
+        // Most of its columns have wall over it (a lintel), and a window's under it too.
+        const bool lintel = 2 * columns_with_wall(g, a, b, r1 + 1, g.rows - 1) >= b - a + 1;
+        const bool parapet = 2 * columns_with_wall(g, a, b, 1, r0) >= b - a + 1;
+        const bool door = lintel && bottom <= p.floor_tolerance + eps &&
+                          width + eps >= p.door_min_width && width <= p.door_max_width + eps &&
+                          top + eps >= p.door_min_height && top <= p.door_max_height + eps &&
+                          top <= ceiling - p.min_lintel + eps;
         const bool window =
-            bottom + eps >= p.window_min_sill && top <= ceiling - p.min_lintel + eps &&
-            width + eps >= p.window_min_width && width <= p.window_max_width + eps &&
-            top - bottom + eps >= p.window_min_height && top - bottom <= p.window_max_height + eps;
+            lintel && parapet && bottom + eps >= p.window_min_sill &&
+            top <= ceiling - p.min_lintel + eps && width + eps >= p.window_min_width &&
+            width <= p.window_max_width + eps && top - bottom + eps >= p.window_min_height &&
+            top - bottom <= p.window_max_height + eps;
         if (door)
           out.push_back({a, b, r0, r1, OpeningKind::kDoor});
         else if (window)

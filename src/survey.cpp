@@ -19,10 +19,44 @@ const char* to_string(StopReason reason) {
       return "stop_percentage";
     case StopReason::kMaxScans:
       return "max_scans";
+    case StopReason::kMaxPath:
+      return "max_path";
     case StopReason::kNoCandidate:
       return "no_candidate";
     case StopReason::kRegistrationFailed:
       return "registration_failed";
+  }
+  return "?";
+}
+
+const char* to_string(SurveyScope scope) {
+  switch (scope) {
+    case SurveyScope::kRoom:
+      return "room";
+    case SurveyScope::kFloor:
+      return "floor";
+    case SurveyScope::kMap:
+      return "map";
+  }
+  return "?";
+}
+
+SurveyScope survey_scope_from_string(const std::string& name) {
+  for (SurveyScope s : {SurveyScope::kRoom, SurveyScope::kFloor, SurveyScope::kMap})
+    if (name == to_string(s)) return s;
+  throw std::invalid_argument("unknown survey scope '" + name + "' (room, floor or map)");
+}
+
+const char* to_string(RoomState state) {
+  switch (state) {
+    case RoomState::kComplete:
+      return "complete";
+    case RoomState::kOpen:
+      return "open";
+    case RoomState::kUnreachable:
+      return "unreachable";
+    case RoomState::kNotJudged:
+      return "not_judged";
   }
   return "?";
 }
@@ -218,23 +252,25 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
 
   // Stages 6-7: next best view and stop percentage, in the room the scans stand in.
   t0 = Clock::now();
-  NbvParams nbv = params_.nbv;
-  nbv.grid_anchor = map_.scanners().front();  // see NbvParams::grid_anchor
-  nbv.overlap_top = map_.ceiling_height();
-  nbv.min_overlap = params_.min_overlap.value_or(params_.registration.min_overlap);
-  rec.room_only = params_.room_only;
-  if (params_.room_only) {
-    nbv.room = room_box(map_.tree(), map_.scanners(), params_.robot.scanner_height, 0.0,
-                        map_.ceiling_height());
-    rec.room = nbv.room;
-    observer_->stage_done(SurveyStage::kRoomFound, rec);
-  }
+  NbvParams nbv = nbv_params();
   SurveyObserver* observer = observer_;
   nbv.progress = [observer](std::size_t done, std::size_t total) {
     observer->candidates_scored(done, total);
   };
-  rec.nbv = next_best_view(map_.tree(), params_.robot, robot_position.value_or(scanner),
-                           map_.scanners(), nbv);
+  rec.scope = params_.scope;
+  const Point3 robot = robot_position.value_or(scanner);
+  if (params_.scope == SurveyScope::kFloor) {
+    plan_floor(rec, nbv, robot);
+  } else {
+    if (params_.scope == SurveyScope::kRoom) {
+      nbv.room = room_box(map_.tree(), map_.scanners(), params_.robot.scanner_height, 0.0,
+                          map_.ceiling_height());
+      rec.room = nbv.room;
+      observer_->stage_done(SurveyStage::kRoomFound, rec);
+    }
+    rec.nbv = next_best_view(map_.tree(), params_.robot, robot, map_.scanners(), nbv);
+    rec.scope_complete = rec.nbv.best && rec.nbv.stop_percent < params_.stop_percent;
+  }
   rec.seconds.nbv = seconds_since(t0);
   rec.seconds.total = seconds_since(t_total);
   observer_->stage_done(SurveyStage::kPlanned, rec);
@@ -266,18 +302,240 @@ std::optional<Point3> recovery_position(const ScanRecord& last, const Point3& fa
   return best;
 }
 
-double Survey::predicted_overlap_at(const Point3& position) const {
+NbvParams Survey::nbv_params() const {
   NbvParams nbv = params_.nbv;
+  nbv.grid_anchor = map_.scanners().front();  // see NbvParams::grid_anchor
   nbv.overlap_top = map_.ceiling_height();
-  return predict_overlap(map_.tree(), position, nbv).share;
+  nbv.min_overlap = params_.min_overlap.value_or(params_.registration.min_overlap);
+  nbv.may_stand = params_.may_stand;
+  nbv.stand_beyond_openings = params_.scope == SurveyScope::kFloor;
+  return nbv;
+}
+
+namespace {
+
+// What lies beyond `door` on `side` (±1 along its wall normal) within `reach` of its
+// centre, floor to `top`: the targets a doorway scan is judged by. A wall along neither
+// axis gives the square around the door (both sides).
+RoomBox beyond_door(const DetectedOpening& door, int side, double reach, double top) {
+  const Eigen::Vector3d c =
+      0.25 * (door.corners[0] + door.corners[1] + door.corners[2] + door.corners[3]);
+  RoomBox box{Point3(c.x() - reach, c.y() - reach, 0.0), Point3(c.x() + reach, c.y() + reach, top)};
+  const Eigen::Vector3d n = double(side) * door.wall_normal;
+  constexpr double kAlongAxis = 0.985;  // within 10° of an axis
+  if (n.x() > kAlongAxis) box.min.x = c.x();
+  if (n.x() < -kAlongAxis) box.max.x = c.x();
+  if (n.y() > kAlongAxis) box.min.y = c.y();
+  if (n.y() < -kAlongAxis) box.max.y = c.y();
+  return box;
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3d> Survey::doorway_positions(const DetectedOpening& door) const {
+  const double r = map_.tree().leaf_size();
+  const Eigen::Vector3d c =
+      0.25 * (door.corners[0] + door.corners[1] + door.corners[2] + door.corners[3]);
+  // In the opening, and in front of it on either side: where the robot's cylinder
+  // clears the wall's face (the opening's corners lie on one face) and the scanner,
+  // looking down no steeper than its lowest elevation, sees the floor just beyond the
+  // opening, which the robot must have seen to drive through.
+  double off = params_.robot.radius + r;
+  const double lowest = params_.nbv.limits.elevation_min_deg;
+  if (lowest < 0 && lowest > -90)
+    off = std::max(off, params_.robot.scanner_height / std::tan(-lowest * M_PI / 180.0) + r);
+  const Eigen::Vector3d ahead = off * door.wall_normal;
+  return {c, c + ahead, c - ahead};
+}
+
+void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& robot) {
+  const SemiOcTree& tree = map_.tree();
+  const double height = params_.robot.scanner_height, top = map_.ceiling_height();
+  const double r = tree.leaf_size();
+  const RoomMap rooms = segment_rooms(tree, height, 0.0, top, map_.openings());
+  // A room is a region the robot's footprint fits in; smaller ones are gaps between
+  // furniture, slivers seen past a window frame.
+  const double footprint = M_PI * std::pow(std::max(params_.robot.radius, r), 2);
+  std::vector<std::optional<std::size_t>> status_of(rooms.rooms().size());
+  for (std::size_t i = 0; i < rooms.rooms().size(); ++i) {
+    if (rooms.rooms()[i].area_m2 < footprint) continue;
+    status_of[i] = rec.rooms.size();
+    RoomStatus st;
+    st.room = rooms.rooms()[i];
+    rec.rooms.push_back(st);
+  }
+  auto status_near = [&](const Point3& p) -> std::optional<std::size_t> {
+    const auto id = rooms.room_near(p, kRoomSeedRadius);
+    return id ? status_of[*id] : std::nullopt;
+  };
+  const std::vector<Point3>& scanners = map_.scanners();
+  for (std::size_t i = 0; i < scanners.size(); ++i)
+    if (const auto s = status_near(scanners[i])) rec.rooms[*s].scans.push_back(i);
+  rec.in_room = status_near(scanners.back());
+
+  // The candidates, once: anywhere the robot can reach, through doors too, and in the
+  // doorways it fits through.
+  const auto t0 = Clock::now();
+  NbvParams with_doorways = nbv;
+  const std::vector<DetectedOpening>& openings = map_.openings();
+  for (const DetectedOpening& o : openings) {
+    if (o.kind != OpeningKind::kDoor || o.width <= 2 * params_.robot.radius + r) continue;
+    for (const Eigen::Vector3d& p : doorway_positions(o)) {
+      with_doorways.doorways.push_back(Point3(p.x(), p.y(), height));
+    }
+  }
+  std::vector<double> path_m;
+  CandidateReport report;
+  const std::vector<Point3> positions =
+      find_candidates(tree, params_.robot, robot, scanners, with_doorways, &report, &path_m);
+  const double seconds_candidates = seconds_since(t0);
+  std::vector<NbvCandidate> all;
+  std::vector<std::vector<NbvCandidate>> in_room(rec.rooms.size());
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    const NbvCandidate c{positions[i], 0.0, path_m[i], std::nullopt};
+    all.push_back(c);
+    if (const auto id = rooms.room_at(positions[i]))
+      if (status_of[*id]) in_room[*status_of[*id]].push_back(c);
+  }
+  auto finish = [&](NbvResult res, const std::optional<std::size_t>& planned) {
+    res.candidate_report = report;
+    res.seconds_candidates = seconds_candidates;
+    rec.nbv = std::move(res);
+    rec.planned_room = planned;
+  };
+
+  // A room's box: its cells' bounds grown by a leaf (its walls), floor to ceiling.
+  auto box_of = [&](const RoomStatus& st) {
+    return RoomBox{Point3(st.room.min.x - r, st.room.min.y - r, 0.0),
+                   Point3(st.room.max.x + r, st.room.max.y + r, top)};
+  };
+  // What is known before judging: rooms found complete stay so; a room without a
+  // candidate cannot be stood in.
+  for (std::size_t i = 0; i < rec.rooms.size(); ++i) {
+    RoomStatus& st = rec.rooms[i];
+    for (const NbvCandidate& c : in_room[i])
+      st.path_m = st.path_m ? std::min(*st.path_m, c.path_m) : c.path_m;
+    if (std::any_of(complete_rooms_.begin(), complete_rooms_.end(),
+                    [&](const Point3& p) { return status_near(p) == i; })) {
+      st.state = RoomState::kComplete;
+    } else if (in_room[i].empty() && i != rec.in_room) {
+      st.state = RoomState::kUnreachable;
+      const Point3 centre(0.5 * (st.room.min.x + st.room.max.x),
+                          0.5 * (st.room.min.y + st.room.max.y), height);
+      st.why = params_.may_stand && !params_.may_stand(centre)
+                   ? "outside the survey area (its centre)"
+                   : "no position the robot can reach and stand in (its doors, or the space "
+                     "seen in it, narrower than the robot's safety cylinder)";
+    }
+  }
+
+  // The robot's room first, from where it can stand in it (anywhere it can reach, if it
+  // stands in no room: in a doorway).
+  NbvParams room_nbv = nbv;
+  std::vector<Point3> here;
+  if (rec.in_room) {
+    room_nbv.room = box_of(rec.rooms[*rec.in_room]);
+    for (std::size_t i = 0; i < scanners.size(); ++i)
+      if (status_near(scanners[i]) == rec.in_room) here.push_back(scanners[i]);
+  } else {
+    room_nbv.room = room_box(tree, {scanners.back()}, height, 0.0, top);
+    here.push_back(scanners.back());
+  }
+  rec.room = room_nbv.room;
+  observer_->stage_done(SurveyStage::kRoomFound, rec);
+  NbvResult current = best_view_among(
+      tree, rec.in_room && !in_room[*rec.in_room].empty() ? in_room[*rec.in_room] : all, room_nbv);
+  const bool known_complete = rec.in_room && rec.rooms[*rec.in_room].state == RoomState::kComplete;
+  const bool open_here =
+      !known_complete && current.best && current.stop_percent >= params_.stop_percent;
+  if (rec.in_room) {
+    RoomStatus& st = rec.rooms[*rec.in_room];
+    st.stop_percent = current.best ? std::optional<double>(current.stop_percent) : std::nullopt;
+    st.state = open_here ? RoomState::kOpen : RoomState::kComplete;
+  }
+  if (open_here) return finish(std::move(current), rec.in_room);
+  complete_rooms_.insert(complete_rooms_.end(), here.begin(), here.end());
+
+  // Then the other rooms, nearest by path first: the first open one is planned for.
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < rec.rooms.size(); ++i)
+    if (rec.rooms[i].state == RoomState::kNotJudged) order.push_back(i);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return *rec.rooms[a].path_m < *rec.rooms[b].path_m;
+  });
+  for (const std::size_t i : order) {
+    RoomStatus& st = rec.rooms[i];
+    NbvParams next = nbv;
+    next.room = box_of(st);
+    NbvResult res = best_view_among(tree, in_room[i], next);
+    st.stop_percent = res.best ? std::optional<double>(res.stop_percent) : std::nullopt;
+    if (res.best && res.stop_percent >= params_.stop_percent) {
+      st.state = RoomState::kOpen;
+      rec.room = next.room;
+      return finish(std::move(res), i);
+    }
+    st.state = RoomState::kComplete;
+    complete_rooms_.push_back(in_room[i].front().position);
+  }
+  // Then the doors with a side where the robot cannot stand yet (nothing seen there, or
+  // too little): a linking scan from the doorway, which sees both sides, nearest first,
+  // judged by what it sees beyond the door. A door looked through once is explored.
+  auto unexplored = [&](const std::optional<std::size_t>& room) {
+    return !room || !status_of[*room] || in_room[*status_of[*room]].empty();
+  };
+  struct DoorwayPlan {
+    std::size_t door;
+    int side;  // the unexplored side, along the door's wall normal
+    const NbvCandidate* doorway;
+  };
+  std::vector<DoorwayPlan> plans;
+  for (const OpeningLink& link : rooms.links()) {
+    const DetectedOpening& o = openings[link.opening];
+    if (o.kind != OpeningKind::kDoor) continue;
+    const Eigen::Vector3d c = 0.25 * (o.corners[0] + o.corners[1] + o.corners[2] + o.corners[3]);
+    if (std::any_of(doors_looked_through_.begin(), doors_looked_through_.end(),
+                    [&](const Point3& d) { return std::hypot(d.x - c.x(), d.y - c.y()) < 2 * r; }))
+      continue;
+    for (const int side : {1, -1}) {
+      if (!unexplored(side > 0 ? link.front : link.back)) continue;
+      // Where the robot would stand first beyond the door: inside the survey area?
+      const Eigen::Vector3d beyond =
+          c + double(side) * (params_.robot.radius + 2 * r) * o.wall_normal;
+      if (params_.may_stand && !params_.may_stand(Point3(beyond.x(), beyond.y(), height))) continue;
+      for (const Eigen::Vector3d& p : doorway_positions(o))
+        for (const NbvCandidate& cand : all)
+          if (std::hypot(cand.position.x - p.x(), cand.position.y - p.y()) < r)
+            plans.push_back({link.opening, side, &cand});
+    }
+  }
+  std::stable_sort(plans.begin(), plans.end(), [](const DoorwayPlan& a, const DoorwayPlan& b) {
+    return a.doorway->path_m < b.doorway->path_m;
+  });
+  for (const DoorwayPlan& plan : plans) {
+    NbvParams beyond = nbv;
+    beyond.room = beyond_door(openings[plan.door], plan.side, nbv.limits.max_range, top);
+    NbvResult res = best_view_among(tree, {*plan.doorway}, beyond);
+    if (!res.best || res.best->score <= 0) continue;
+    const DetectedOpening& o = openings[plan.door];
+    const Eigen::Vector3d c = 0.25 * (o.corners[0] + o.corners[1] + o.corners[2] + o.corners[3]);
+    doors_looked_through_.push_back(Point3(c.x(), c.y(), height));
+    rec.planned_doorway = plan.door;
+    rec.room = beyond.room;
+    return finish(std::move(res), std::nullopt);
+  }
+  // Every room the robot can reach is complete: the robot's room's result ends the survey.
+  rec.scope_complete = current.best.has_value();
+  finish(std::move(current), rec.in_room);
+}
+
+double Survey::predicted_overlap_at(const Point3& position) const {
+  return predict_overlap(map_.tree(), position, nbv_params()).share;
 }
 
 std::optional<double> Survey::path_between(const Point3& from, const Point3& to) const {
-  NbvParams nbv = params_.nbv;
-  nbv.grid_anchor = map_.scanners().front();
   std::vector<double> path_m;
-  const std::vector<Point3> positions =
-      find_candidates(map_.tree(), params_.robot, from, map_.scanners(), nbv, nullptr, &path_m);
+  const std::vector<Point3> positions = find_candidates(
+      map_.tree(), params_.robot, from, map_.scanners(), nbv_params(), nullptr, &path_m);
   for (std::size_t i = 0; i < positions.size(); ++i)
     if (positions[i].x == to.x && positions[i].y == to.y) return path_m[i];
   return std::nullopt;
@@ -314,6 +572,7 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
         return out;
       }
       path = path_between(*target, *f.retry);
+      out.path_m += path.value_or(0.0);
       platform.move_to(*f.retry);
       target = f.retry;
       predicted = predicted_overlap_at(*f.retry);
@@ -331,23 +590,29 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
       out.stopped_because = StopReason::kNoCandidate;
       return out;
     }
-    if (rec.nbv.stop_percent < params_.stop_percent) {
+    if (rec.scope_complete) {
       out.stopped_because = StopReason::kStopPercentage;
       return out;
     }
     if (i == params_.max_scans) break;
     const NextScanChoice next = policy.choose(rec, map_);
-    platform.move_to(next.position);
-    target = next.position;
     // The chosen candidate's prediction (the NBV's was made while choosing it) and path.
     const auto chosen = std::find_if(
         rec.nbv.candidates.begin(), rec.nbv.candidates.end(), [&](const NbvCandidate& c) {
           return c.position.x == next.position.x && c.position.y == next.position.y;
         });
     const bool known = chosen != rec.nbv.candidates.end();
+    path =
+        known ? std::optional<double>(chosen->path_m) : path_between(rec.scanner(), next.position);
+    if (params_.max_path_m && out.path_m + path.value_or(0.0) > *params_.max_path_m) {
+      out.stopped_because = StopReason::kMaxPath;
+      return out;
+    }
+    platform.move_to(next.position);
+    target = next.position;
     predicted = known && chosen->predicted_overlap ? *chosen->predicted_overlap
                                                    : predicted_overlap_at(next.position);
-    path = known ? std::optional<double>(chosen->path_m) : std::nullopt;
+    out.path_m += path.value_or(0.0);
     observer_->moved(rec, next, policy);
   }
   out.stopped_because = StopReason::kMaxScans;

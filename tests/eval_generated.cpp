@@ -3,7 +3,8 @@
 // scene's scanner and robot, the CLI's planning defaults, the NBV policy), then judged:
 // how the survey ended, scans, coverage of the reference, the doors and windows found
 // against the room's true ones (precision, recall at IoU ≥ 0.5), the largest pose error,
-// registrations failed (and recovered), predicted against achieved overlap, seconds. Prints one JSON document (per scene and totals); a line per scene on stderr.
+// registrations failed (and recovered), predicted against achieved overlap, seconds. Prints one
+// JSON document (per scene and totals); a line per scene on stderr.
 // --check exits 1 when the totals miss the acceptance thresholds
 // (docs/generated-scenes.md).
 //
@@ -108,6 +109,7 @@ SceneResult evaluate(std::uint64_t seed, sim::GeneratedKind asked, const Options
         [&coverage](const Cloud& points, const Eigen::Isometry3d& to_world) {
           sim_platform::add_to_coverage(coverage, points, to_world);
         });
+    p.may_stand = platform.survey_area_rule();
     BestScorePolicy policy;
     Survey survey(p);
     const SurveyOutcome outcome = survey.run(platform, policy);

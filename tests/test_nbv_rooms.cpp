@@ -73,6 +73,33 @@ TEST(NbvRooms, ADoorSeparatesTwoRoomsAndLinksThem) {
   EXPECT_EQ(rooms.rooms()[*east].openings, std::vector<std::size_t>{0});
 }
 
+// A door detected a leaf short of each jamb (its label too): the rays that passed the gaps
+// saw the space behind directly. The opening's sill line, drawn past its edges, still
+// keeps the rooms apart.
+TEST(NbvRooms, ADoorDetectedShortOfItsJambsStillSeparatesTheRooms) {
+  TwoRooms m(false);
+  m.leaves({4.0, 1.6 + kLeaf, 0}, {4.0 + kLeaf, 2.4 - kLeaf, 2.0}, Label::kDoor);
+  DetectedOpening d = door_at_x4();
+  d.corners[0].y() = d.corners[3].y() = 1.6 + kLeaf;
+  d.corners[1].y() = d.corners[2].y() = 2.4 - kLeaf;
+  d.width = 0.8 - 2 * kLeaf;
+  // Without the opening, the gaps beside the door label join the rooms.
+  EXPECT_EQ(segment_rooms(m.t, kHeight, 0.0, 2.4).rooms().size(), 1u);
+  const RoomMap rooms = segment_rooms(m.t, kHeight, 0.0, 2.4, {d});
+  ASSERT_EQ(rooms.rooms().size(), 2u);
+  EXPECT_NE(rooms.room_at(Point3(2, 2, 0)), rooms.room_at(Point3(6, 2, 0)));
+  ASSERT_EQ(rooms.links().size(), 1u);
+  EXPECT_TRUE(rooms.links()[0].front && rooms.links()[0].back);
+  // A scanner's own cell may be in no room (its blind zone): room_near finds the room
+  // around it, and nothing farther than the radius.
+  EXPECT_FALSE(rooms.room_at(Point3(4.03, 2.0, 0)));  // the door
+  EXPECT_EQ(rooms.room_near(Point3(4.03, 2.0, 0), 1.0),
+            rooms.room_at(Point3(2, 2, 0)));  // ties: grid order
+  EXPECT_EQ(rooms.room_near(Point3(4.03, 2.0, 0), 0.01), std::nullopt);
+  EXPECT_EQ(rooms.room_near(Point3(8.6, 2.0, 0), 1.0), rooms.room_at(Point3(6, 2, 0)));
+  EXPECT_FALSE(rooms.room_near(Point3(-3.0, 2.0, 0), 1.0));
+}
+
 // Without the door label the doorway is free space: one room through it. Above the
 // door's top the wall separates them again.
 TEST(NbvRooms, AnUnlabelledDoorwayJoinsTheRoomsBelowItsTop) {

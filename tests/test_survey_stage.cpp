@@ -121,6 +121,8 @@ TEST(SurveyStage, ReportsEveryStageInOrderAndEndsByItsRule) {
       break;
     case StopReason::kRegistrationFailed:
       FAIL() << outcome.error;
+    case StopReason::kMaxPath:
+      FAIL() << "no path budget was set";
   }
   // Every scan before the last went on: its stop percentage was above the threshold.
   for (std::size_t i = 0; i + 1 < n; ++i) {
@@ -366,6 +368,134 @@ TEST(SurveyStage, AScannerThatCannotSeeTheCeilingSurveysTheRoom) {
   const double height = expect_complete_without_ceiling(scene);
   EXPECT_GT(height, 3.0);
   EXPECT_LT(height, 5.5);
+}
+
+// Two rooms of 4 × 3.5 m (x 0..4 and 4.2..8.2), 2.6 m high, a 0.9 m door between them
+// (y 1.3..2.2), a table in each; the robot (radius 0.25 m) starts in the west room.
+// `west_only`: the survey area is the west room.
+sim::Scene two_room_scene(const std::string& name, bool west_only) {
+  using nlohmann::json;
+  const json outline = {{-0.3, -0.3}, {8.5, -0.3}, {8.5, 3.8}, {-0.3, 3.8}};
+  json walls = json::array();
+  const double corners[5][2] = {{-0.1, -0.1}, {8.3, -0.1}, {8.3, 3.6}, {-0.1, 3.6}, {-0.1, -0.1}};
+  for (int i = 0; i < 4; ++i)
+    walls.push_back({{"from", {corners[i][0], corners[i][1]}},
+                     {"to", {corners[i + 1][0], corners[i + 1][1]}},
+                     {"z1", 2.6}});
+  walls.push_back(
+      {{"from", {4.1, 0.0}},
+       {"to", {4.1, 3.5}},
+       {"z1", 2.6},
+       {"openings", {{{"kind", "door"}, {"start", 1.3}, {"width", 0.9}, {"height", 2.1}}}}});
+  json scene = {
+      {"format", "semioctree-scene"},
+      {"version", 1},
+      {"name", name},
+      {"walls", walls},
+      {"slabs",
+       {{{"polygon", outline}, {"z0", -0.2}, {"z1", 0.0}},
+        {{"polygon", outline}, {"z0", 2.6}, {"z1", 2.8}}}},
+      {"boxes",
+       {{{"center", {2.6, 2.6, 0.375}}, {"size", {1.2, 0.7, 0.75}}, {"name", "west table"}},
+        {{"center", {6.6, 0.9, 0.375}}, {"size", {1.2, 0.7, 0.75}}, {"name", "east table"}}}},
+      {"robot", {{"start", {1.5, 1.2}}, {"radius", 0.25}}},
+      {"scanner", {{"azimuth_step_deg", 0.4}, {"elevation_step_deg", 0.4}}}};
+  if (west_only) scene["survey_area"] = {{0.0, 0.0}, {4.0, 0.0}, {4.0, 3.5}, {0.0, 3.5}};
+  const std::filesystem::path dir = testing::temp_dir(name);
+  const std::filesystem::path file = dir / (name + ".scene.json");
+  std::ofstream(file) << scene.dump(1);
+  sim::Scene loaded = sim::load_scene(file.string());
+  std::filesystem::remove_all(dir);
+  return loaded;
+}
+
+// The true x of every scan the survey placed.
+std::vector<double> true_xs(const SimulatedPlatform& platform) {
+  std::vector<double> xs;
+  for (const Eigen::Vector3d& c : platform.optical_centres()) xs.push_back(c.x());
+  return xs;
+}
+
+// The floor scope finishes the west room, goes through the door and finishes the east
+// one: both rooms complete, each stood in, and the survey ends by its stop percentage.
+TEST(SurveyStage, AFloorSurveyGoesThroughTheDoorAndCompletesBothRooms) {
+  const sim::Scene scene = two_room_scene("two-rooms", false);
+  SimulatedPlatform platform(scene, 1, 0);
+  SurveyParams p = params_for(scene, 12, 0.1);
+  ASSERT_EQ(p.scope, SurveyScope::kFloor);  // the default
+  Survey survey(p, nullptr);
+  BestScorePolicy nbv;
+  const SurveyOutcome outcome = survey.run(platform, nbv);
+  ASSERT_EQ(outcome.stopped_because, StopReason::kStopPercentage) << outcome.error;
+  const ScanRecord& last = survey.records().back();
+  EXPECT_TRUE(last.scope_complete);
+  std::size_t big_rooms = 0;
+  for (const RoomStatus& room : last.rooms) {
+    if (room.room.area_m2 < 10) continue;  // each room has about 13 m² of free floor
+    ++big_rooms;
+    EXPECT_EQ(room.state, RoomState::kComplete);
+    EXPECT_FALSE(room.scans.empty());
+  }
+  EXPECT_EQ(big_rooms, 2u);
+  const std::vector<double> xs = true_xs(platform);
+  EXPECT_TRUE(std::any_of(xs.begin(), xs.end(), [](double x) { return x > 4.2; }));
+  // Which room each scan stood in moves once, from west to east (it finishes a room
+  // before it leaves it), through the door or from its doorway.
+  std::size_t changes = 0;
+  for (std::size_t i = 1; i < survey.records().size(); ++i)
+    changes += survey.records()[i].in_room != survey.records()[i - 1].in_room;
+  EXPECT_LE(changes, 2u);
+  EXPECT_GT(outcome.path_m, 0.0);
+}
+
+// The room scope, and the floor scope with a survey area of the west room, stay in the
+// west room; the east room is then reported as outside the survey area.
+TEST(SurveyStage, ARoomScopeOrASurveyAreaKeepsTheRobotInItsRoom) {
+  for (const bool by_area : {false, true}) {
+    const sim::Scene scene = two_room_scene("two-rooms-west", by_area);
+    SimulatedPlatform platform(scene, 1, 0);
+    SurveyParams p = params_for(scene, 8, 0.1);
+    if (by_area)
+      p.may_stand = platform.survey_area_rule();
+    else
+      p.scope = SurveyScope::kRoom;
+    Survey survey(p, nullptr);
+    BestScorePolicy nbv;
+    const SurveyOutcome outcome = survey.run(platform, nbv);
+    EXPECT_EQ(outcome.stopped_because, StopReason::kStopPercentage) << outcome.error;
+    for (const double x : true_xs(platform)) EXPECT_LT(x, 4.0) << (by_area ? "area" : "room");
+    if (!by_area) continue;
+    const ScanRecord& last = survey.records().back();
+    const auto east = std::find_if(last.rooms.begin(), last.rooms.end(), [](const RoomStatus& r) {
+      return r.room.min.x > 4.0 && r.room.area_m2 > 1.0;
+    });
+    if (east != last.rooms.end()) {  // seen through the door: unreachable, and why
+      EXPECT_EQ(east->state, RoomState::kUnreachable);
+      EXPECT_NE(east->why.find("survey area"), std::string::npos) << east->why;
+    }
+  }
+}
+
+// A path budget ends the survey before the move that would spend it.
+TEST(SurveyStage, APathBudgetEndsTheSurveyBeforeTheMoveBeyondIt) {
+  const sim::Scene scene = two_room_scene("two-rooms-path", false);
+  SimulatedPlatform platform(scene, 1, 0);
+  SurveyParams p = params_for(scene, 8, 0.0);  // never complete
+  p.max_path_m = 0.4;                          // shorter than any move: candidates lie 0.5 m apart
+  Survey survey(p, nullptr);
+  BestScorePolicy nbv;
+  const SurveyOutcome outcome = survey.run(platform, nbv);
+  EXPECT_EQ(outcome.stopped_because, StopReason::kMaxPath);
+  EXPECT_EQ(survey.records().size(), 1u);
+  EXPECT_EQ(outcome.path_m, 0.0);
+  EXPECT_STREQ(to_string(StopReason::kMaxPath), "max_path");
+}
+
+TEST(SurveyStage, ScopesAndRoomStatesHaveNames) {
+  for (SurveyScope s : {SurveyScope::kRoom, SurveyScope::kFloor, SurveyScope::kMap})
+    EXPECT_EQ(survey_scope_from_string(to_string(s)), s);
+  EXPECT_THROW(survey_scope_from_string("building"), std::invalid_argument);
+  EXPECT_STREQ(to_string(RoomState::kUnreachable), "unreachable");
 }
 
 TEST(SurveyStage, RandomPolicyDrawsAmongTheCandidatesReproducibly) {

@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <random>
 #include <string>
@@ -22,6 +23,17 @@
 
 namespace semioctree {
 
+// What the survey plans over (docs/data-flow.md, "Scope").
+enum class SurveyScope {
+  kRoom,   // the room the scans stand in (room_box): the survey ends when it is complete
+  kFloor,  // room by room: the robot's room until it is complete, then the nearest open
+           // room by path, through a door; ends when every reachable room is complete
+  kMap,    // the whole map as one room (Eq 5 as the paper reads when the grid is the room)
+};
+const char* to_string(SurveyScope scope);  // "room", "floor", "map"
+// The scope named `name`; throws std::invalid_argument naming the accepted ones.
+SurveyScope survey_scope_from_string(const std::string& name);
+
 struct SurveyParams {
   SurveyMapParams map;
   PreprocessParams preprocess;
@@ -30,9 +42,15 @@ struct SurveyParams {
   // Its room, grid anchor, overlap_top, min_overlap and progress are set by the survey.
   NbvParams nbv;
   RobotGeometry robot;
-  double stop_percent = 0.1;   // Eq 5 threshold, %
-  bool room_only = true;       // targets and Eq 5 inside room_box (false: the whole map)
+  double stop_percent = 0.1;  // Eq 5 threshold, %
+  SurveyScope scope = SurveyScope::kFloor;
+  // Where the robot may stand (x, y of the scanner; the survey area a user gives).
+  // Empty: wherever it can reach.
+  std::function<bool(const Point3&)> may_stand;
   std::size_t max_scans = 10;  // Survey::run's scan budget (at least 1)
+  // Survey::run's path budget, m: the survey ends before a move that would take the
+  // robot's path beyond it. None: no budget.
+  std::optional<double> max_path_m;
   // The predicted overlap a candidate's scan needs with the map (NbvParams::min_overlap;
   // docs/nbv.md). None: the share registration itself needs, registration.min_overlap.
   std::optional<double> min_overlap;
@@ -72,6 +90,24 @@ struct IncomingScan {
   bool from_robot = true;
 };
 
+// A room of the floor (SurveyScope::kFloor) as one scan's planning left it.
+enum class RoomState {
+  kComplete,     // its Eq 5 is below the stop percentage
+  kOpen,         // not complete, and the robot can stand in it
+  kUnreachable,  // the robot can stand nowhere in it (RoomStatus::why)
+  kNotJudged,    // not looked at: the robot's room was still open
+};
+const char* to_string(RoomState state);  // "complete", "open", "unreachable", "not_judged"
+
+struct RoomStatus {
+  Room room;  // cells, area, bounds, the openings on its border
+  RoomState state = RoomState::kNotJudged;
+  std::optional<double> stop_percent;  // Eq 5 in its box from its best candidate, if judged
+  std::optional<double> path_m;        // the robot's path to its nearest candidate
+  std::vector<std::size_t> scans;      // indices of the scans that stood in it
+  std::string why;                     // kUnreachable: why
+};
+
 // What the survey did with one scan; filled stage by stage (SurveyObserver::stage_done).
 struct ScanRecord {
   std::size_t index = 0;
@@ -91,9 +127,19 @@ struct ScanRecord {
   };
   std::optional<Registration> registration;  // none for the first or a posed scan
   ScanUpdateReport update;
-  bool room_only = false;       // the room was asked for
+  SurveyScope scope = SurveyScope::kRoom;
   std::optional<RoomBox> room;  // where targets and Eq 5 were counted (none: whole map)
-  NbvResult nbv;                // candidates, their scores, the best one, Eq 5
+  // kFloor: the rooms of the map at this scan (segment_rooms, those the robot's footprint
+  // fits in), the one the scan stands in and the one the NBV was planned for.
+  std::vector<RoomStatus> rooms;
+  std::optional<std::size_t> in_room, planned_room;  // indices into `rooms`
+  // kFloor: the door the NBV stands in to look into a room not seen yet (an index into
+  // the map's openings), when no room was open.
+  std::optional<std::size_t> planned_doorway;
+  // The scope is done: Eq 5 from the NBV is below the stop percentage (kFloor: in every
+  // room the robot can reach, and no door is left to look through).
+  bool scope_complete = false;
+  NbvResult nbv;  // candidates, their scores, the best one, Eq 5
   // Survey::run: the overlap with the map predicted for this scan's position when it was
   // chosen (predict_overlap, as the NBV predicts it), to set beside registration's
   // overlap; none for the first scan.
@@ -115,8 +161,9 @@ struct ScanRecord {
 enum class SurveyStage { kPreprocessed, kRegistered, kMapped, kRoomFound, kPlanned };
 
 // Why Survey::run ended. kRegistrationFailed leaves the map of the scans before intact.
-enum class StopReason { kStopPercentage, kMaxScans, kNoCandidate, kRegistrationFailed };
-const char* to_string(StopReason reason);  // "stop_percentage", "max_scans", ...
+// kStopPercentage: with SurveyScope::kFloor, every room the robot can reach is complete.
+enum class StopReason { kStopPercentage, kMaxScans, kMaxPath, kNoCandidate, kRegistrationFailed };
+const char* to_string(StopReason reason);  // "stop_percentage", "max_scans", "max_path", ...
 
 // Where to scan next, and what the policy predicted the scan adds (if it knows).
 struct NextScanChoice {
@@ -199,6 +246,7 @@ struct SurveyOutcome {
   StopReason stopped_because = StopReason::kMaxScans;
   std::string error;                                       // kRegistrationFailed: why
   std::vector<RegistrationFailure> registration_failures;  // recovered from, or the last
+  double path_m = 0;  // the robot's path over the survey (to failed scans and retries too)
 };
 
 // Where to scan again after a scan at `failed` could not be registered: of the
@@ -223,12 +271,12 @@ class Survey {
   const ScanRecord& add_scan(const IncomingScan& scan,
                              const std::optional<Point3>& robot_position = std::nullopt);
 
-  // The loop: scans from `platform` until the stop percentage, no candidate or the
-  // budget ends it; moves to `policy`'s choice in between. A scan that cannot be
-  // registered is dropped (ScanPlatform::rejected) and taken again at recovery_position,
-  // halfway back to the last placed scan, then a quarter, ... up to
-  // SurveyParams::max_recoveries times in a row; then the survey ends
-  // (kRegistrationFailed with the error). It does not throw for a failed registration.
+  // The loop: scans from `platform` until the stop percentage (kFloor: in every room
+  // the robot can reach), no candidate, the scan budget or the path budget ends it; moves to
+  // `policy`'s choice in between. A scan that cannot be registered is dropped
+  // (ScanPlatform::rejected) and taken again at recovery_position, halfway back to the last placed
+  // scan, then a quarter, ... up to SurveyParams::max_recoveries times in a row; then the survey
+  // ends (kRegistrationFailed with the error). It does not throw for a failed registration.
   SurveyOutcome run(ScanPlatform& platform, NextScanPolicy& policy);
 
   const SurveyMap& map() const { return map_; }
@@ -244,6 +292,17 @@ class Survey {
                                                 const std::string& pose_failure,
                                                 double* scanner_shift_m) const;
 
+  // The NBV's parameters for the map as it stands: the candidate grid's anchor, where
+  // candidates may stand, the overlap rule.
+  NbvParams nbv_params() const;
+  // Stages 6-7 of SurveyScope::kFloor: fills rec.rooms, rec.in_room, rec.planned_room,
+  // rec.room and rec.nbv (docs/data-flow.md, "Scope").
+  void plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& robot);
+
+  // Where a linking scan may stand at `door`: in the opening, and in front of it on
+  // either side (NbvParams::doorways).
+  std::vector<Eigen::Vector3d> doorway_positions(const DetectedOpening& door) const;
+
   // The overlap a scan at `position` is predicted to have with the map (as the NBV's
   // candidates are judged).
   double predicted_overlap_at(const Point3& position) const;
@@ -256,6 +315,10 @@ class Survey {
   SurveyObserver silent_;
   SurveyMap map_;
   std::vector<ScanRecord> records_;
+  // kFloor: points inside the rooms found complete (a room holding one stays complete).
+  std::vector<Point3> complete_rooms_;
+  // kFloor: centres of the doors a doorway scan was planned at (not planned at again).
+  std::vector<Point3> doors_looked_through_;
 };
 
 // Heading of a pose (its x axis in the horizontal plane), degrees.

@@ -39,6 +39,17 @@ SimulatedPlatform::SimulatedPlatform(const sim::Scene& scene, std::uint64_t seed
       caster_(sim::make_ray_caster(sim::tessellate(scene))),
       robot_(scene.robot, seed) {}
 
+bool SimulatedPlatform::in_survey_area(const Point3& p) const {
+  if (!scene_.survey_area) return true;
+  const Eigen::Vector3d w = survey_to_world_ * Eigen::Vector3d(p.x, p.y, p.z);
+  return sim::point_in_polygon(*scene_.survey_area, w.head<2>());
+}
+
+std::function<bool(const Point3&)> SimulatedPlatform::survey_area_rule() const {
+  if (!scene_.survey_area) return {};
+  return [this](const Point3& p) { return in_survey_area(p); };
+}
+
 IncomingScan SimulatedPlatform::scan() {
   if (last_points_) throw std::logic_error("SimulatedPlatform: the last scan was not placed");
   const std::size_t i = truths_.size();

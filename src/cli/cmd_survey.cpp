@@ -56,6 +56,7 @@ struct SurveyOptions {
   PlanningOptions plan;
   int max_scans = 10;
   int max_recoveries = 3;
+  double max_path = 0;  // m; 0: no path budget
   bool homogeneous = false;
   std::uint64_t seed = 1;
   // "random": a random feasible candidate (the baseline); "oracle": the feasible
@@ -261,6 +262,7 @@ void run_survey(const SurveyOptions& o) {
   apply_planning_options(o.plan, p, o.homogeneous);
   p.max_scans = std::size_t(o.max_scans);
   p.max_recoveries = std::size_t(o.max_recoveries);
+  if (o.max_path > 0) p.max_path_m = o.max_path;
   if (o.homogeneous)
     std::printf("homogeneous grid of %.3f m voxels (the baseline): expect it to be slow\n",
                 o.plan.leaf);
@@ -278,6 +280,7 @@ void run_survey(const SurveyOptions& o) {
     };
   }
   SimulatedPlatform platform(scene, o.seed, o.plan.threads, count_coverage);
+  p.may_stand = platform.survey_area_rule();
   SimulatedSurveyOutput output(o.out, p, platform, coverage.get());
   Survey survey(p, &output);
   std::unique_ptr<NextScanPolicy> policy;
@@ -314,7 +317,18 @@ void run_survey(const SurveyOptions& o) {
       std::printf("stop: no feasible candidate remains\n");
       break;
     case StopReason::kStopPercentage:
-      std::printf("stop: stop percentage %.3f %% < %.3f %%\n", last.nbv.stop_percent, o.plan.stop);
+      if (last.scope == SurveyScope::kFloor)
+        std::printf("stop: every room the robot can reach is below the stop percentage (%.3f %%)\n",
+                    o.plan.stop);
+      else
+        std::printf("stop: stop percentage %.3f %% < %.3f %%\n", last.nbv.stop_percent,
+                    o.plan.stop);
+      break;
+    case StopReason::kMaxPath:
+      std::printf(
+          "stop: the next move would take the path beyond --max-path %.1f m (%.1f m so "
+          "far)\n",
+          o.max_path, outcome.path_m);
       break;
     default:
       std::printf("stop: scan budget of %d spent (stop percentage %.3f %%)\n", o.max_scans,
@@ -359,6 +373,11 @@ void add_survey_command(CLI::App& app) {
       ->required();
   add_planning_options(*cmd, o->plan);
   cmd->add_option("--max-scans", o->max_scans, "scan budget")->capture_default_str();
+  cmd->add_option("--max-path", o->max_path,
+                  "path budget, m: the survey ends before a move that would take the robot's "
+                  "path (over the cells its safety cylinder clears) beyond it; 0: none")
+      ->check(finite_in(0, 1e6))
+      ->capture_default_str();
   cmd->add_option("--max-recoveries", o->max_recoveries,
                   "a scan that cannot be registered is dropped and taken again nearer the last "
                   "placed scan (halfway back, then a quarter, ...): at most this many times in "

@@ -38,11 +38,16 @@ void add_planning_options(CLI::App& cmd, PlanningOptions& o) {
                  "else at least 1000)")
       ->check(zero_or_whole_in(1000, 1000000000))
       ->capture_default_str();
-  cmd.add_flag("--whole-map", o.whole_map,
-               "count occluded space as NBV targets and in the stop percentage over the whole "
-               "map, as Eq 5 reads when the grid is the room; default: only inside the room the "
-               "scans stand in (its walls, floor and ceiling), so that space behind the walls or "
-               "seen out of a window does not count");
+  cmd.add_option(
+         "--scope", o.scope,
+         "what the NBV targets and the stop percentage count: room = the room the scans stand "
+         "in (its walls, floor and ceiling; space behind the walls or seen through a window "
+         "does not count), the survey ends when it is complete; floor = room by room: the "
+         "robot's room until it is complete, then the nearest room it can reach through a door "
+         "that is not, until every reachable room is complete; map = the whole map as one "
+         "room, as the paper's Eq 5 reads when the grid is the room")
+      ->check(CLI::IsMember({"room", "floor", "map"}))
+      ->capture_default_str();
   cmd.add_option("--ceiling", o.ceiling,
                  "ceiling height above the floor, m: the map's top (default: the first scan's "
                  "ceiling, or without one the top of its points)")
@@ -82,7 +87,7 @@ void apply_planning_options(const PlanningOptions& o, SurveyParams& p, bool homo
   p.nbv.threads = o.threads;
   p.nbv.limits = p.map.limits;
   p.stop_percent = o.stop;
-  p.room_only = !o.whole_map;
+  p.scope = survey_scope_from_string(o.scope);
   if (o.min_overlap >= 0) p.min_overlap = o.min_overlap;
 }
 

@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cstddef>
+#include <string>
 
 #include "semioctree/survey.h"
 
@@ -17,9 +18,9 @@ struct PlanningOptions {
   double candidate_spacing = 0.5;
   std::size_t target_points = 400000;
   unsigned threads = 0;
-  bool whole_map = false;   // count targets and Eq 5 over the whole map, not the room
-  double ceiling = 0;       // > 0: the room's height above the floor (--ceiling)
-  double min_overlap = -1;  // < 0: registration's own bound (SurveyParams::min_overlap)
+  std::string scope = "floor";  // SurveyScope: room, floor or map
+  double ceiling = 0;           // > 0: the room's height above the floor (--ceiling)
+  double min_overlap = -1;      // < 0: registration's own bound (SurveyParams::min_overlap)
 };
 void add_planning_options(CLI::App& cmd, PlanningOptions& o);
 

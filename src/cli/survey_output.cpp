@@ -37,6 +37,26 @@ json pose_json(const Eigen::Isometry3d& p) {
   return {{"x", t.x()}, {"y", t.y()}, {"z", t.z()}, {"yaw_deg", yaw_deg_of(p)}};
 }
 
+json rooms_json(const std::vector<RoomStatus>& rooms) {
+  json out = json::array();
+  for (std::size_t i = 0; i < rooms.size(); ++i) {
+    const RoomStatus& st = rooms[i];
+    const Room& room = st.room;
+    json o = {{"id", i},
+              {"state", to_string(st.state)},
+              {"area_m2", room.area_m2},
+              {"min", {room.min.x, room.min.y, room.min.z}},
+              {"max", {room.max.x, room.max.y, room.max.z}},
+              {"openings", room.openings},
+              {"scans", st.scans},
+              {"stop_percent", st.stop_percent ? json(*st.stop_percent) : json(nullptr)},
+              {"path_m", st.path_m ? json(*st.path_m) : json(nullptr)}};
+    if (!st.why.empty()) o["why"] = st.why;
+    out.push_back(o);
+  }
+  return out;
+}
+
 void print_floor_layer_note(const RobotGeometry& robot, double leaf) {
   if (floor_layer_clearance(robot, leaf) > robot.ground_clearance)
     std::printf(
@@ -138,6 +158,20 @@ void SurveyOutput::stage_done(SurveyStage stage, const ScanRecord& s) {
     case SurveyStage::kPlanned: {
       if (progress_) progress_->finish();
       const NbvResult& nbv = s.nbv;
+      if (s.scope == SurveyScope::kFloor) {
+        std::size_t count[4] = {0, 0, 0, 0};
+        for (const RoomStatus& room : s.rooms) ++count[int(room.state)];
+        std::printf("  rooms: %zu (%zu complete, %zu open, %zu unreachable, %zu not judged)",
+                    s.rooms.size(), count[int(RoomState::kComplete)], count[int(RoomState::kOpen)],
+                    count[int(RoomState::kUnreachable)], count[int(RoomState::kNotJudged)]);
+        if (s.in_room) std::printf("; standing in room %zu", *s.in_room);
+        if (s.planned_room && s.planned_room != s.in_room)
+          std::printf("; next: room %zu, %.1f m away", *s.planned_room,
+                      s.rooms[*s.planned_room].path_m.value_or(0.0));
+        if (s.planned_doorway && nbv.best)
+          std::printf("; next: a doorway of door %zu, to look through it", *s.planned_doorway);
+        std::printf("\n");
+      }
       if (nbv.best) {
         std::printf(
             "  nbv: %zu feasible candidates, %zu occluded targets; best (%.3f, %.3f) score "
@@ -221,6 +255,13 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
   r["path_m"] = s.path_m ? json(*s.path_m) : json(nullptr);
   if (best) r["nbv"]["path_m"] = best->path_m;
   r["occluded_targets"] = s.nbv.scoring.targets;
+  r["scope"] = to_string(s.scope);
+  if (s.scope == SurveyScope::kFloor) {
+    r["rooms"] = rooms_json(s.rooms);
+    r["in_room"] = s.in_room ? json(*s.in_room) : json(nullptr);
+    r["planned_room"] = s.planned_room ? json(*s.planned_room) : json(nullptr);
+    r["planned_doorway"] = s.planned_doorway ? json(*s.planned_doorway) : json(nullptr);
+  }
   if (s.room)  // where targets and Eq 5 were counted (null: the whole map)
     r["room"] = {{"min", {s.room->min.x, s.room->min.y, s.room->min.z}},
                  {"max", {s.room->max.x, s.room->max.y, s.room->max.z}}};
@@ -329,6 +370,13 @@ void SurveyOutput::write_survey_json(const std::string& stopped_because, const j
             {"path_m", path_m},
             {"openings", openings},
             {"peak_rss_mib", peak_resident_mib()}};
+  // The floor's rooms as the last scan left them (openings: indices into "openings").
+  if (!records_.empty() && records_.back().contains("rooms")) {
+    j["scope"] = records_.back()["scope"];
+    j["rooms"] = records_.back()["rooms"];
+  } else if (!records_.empty()) {
+    j["scope"] = records_.back()["scope"];
+  }
   for (const auto& [k, v] : extra.items()) j[k] = v;
   std::filesystem::create_directories(dir_);
   write_file_atomically((std::filesystem::path(dir_) / "survey.json").string(),

@@ -49,6 +49,8 @@ nlohmann::json octants_json(const SemiOcTree& tree, nlohmann::json& volume_perce
 
 // x, y, z and heading of a scanner pose.
 nlohmann::json pose_json(const Eigen::Isometry3d& scanner_to_survey);
+// A floor's rooms (ScanRecord::rooms): id, state, area, bounds, openings, scans, Eq 5, path.
+nlohmann::json rooms_json(const std::vector<RoomStatus>& rooms);
 
 // Says so when the leaf is coarser than the robot's ground clearance (obstacles in the
 // floor's leaf layer are then driven over, see floor_layer_clearance).

@@ -296,36 +296,56 @@ std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry&
     std::int64_t q = d >= 0 ? (d + m - 1) / m : -((-d) / m);
     return off + q * m;
   };
+  // One position (grid point or doorway) tested: where it stands, whether it may, whether
+  // the robot fits and reaches it, whether a scan stood there.
+  auto consider = [&](const Point3& p, bool doorway) {
+    const auto o = tree.find_octant(p);
+    const bool stands = o && (free_space(o->label()) ||
+                              (params.stand_beyond_openings && o->label() == Label::kOut) ||
+                              (doorway && o->label() == Label::kDoor));
+    if (!stands) {
+      ++rep.not_empty;
+      return;
+    }
+    if (params.may_stand && !params.may_stand(p)) {
+      ++rep.outside_area;
+      return;
+    }
+    octomap::OcTreeKey key;
+    tree.key_of(p, key);
+    const std::size_t i =
+        plane.index(int(leaf_cell(key.k[0]) - plane.x0), int(leaf_cell(key.k[1]) - plane.y0));
+    if (!clear[i]) {
+      ++rep.cylinder_blocked;
+      return;
+    }
+    if (!std::isfinite(path[i])) {
+      ++rep.unreachable;
+      return;
+    }
+    const auto scanned_here = [&](const Point3& c) { return std::hypot(c.x - p.x, c.y - p.y) < r; };
+    if (std::any_of(past_scans.begin(), past_scans.end(), scanned_here)) {
+      ++rep.already_scanned;
+      return;
+    }
+    ++rep.feasible;
+    out.push_back(p);
+    if (path_m) path_m->push_back(double(path[i]) * r);
+  };
   const std::int64_t x0 = plane.x0, y0 = plane.y0;
-  for (std::int64_t gy = first_on_grid(y0 + 1, off_y); gy < y0 + plane.ny - 1; gy += m) {
+  for (std::int64_t gy = first_on_grid(y0 + 1, off_y); gy < y0 + plane.ny - 1; gy += m)
     for (std::int64_t gx = first_on_grid(x0 + 1, off_x); gx < x0 + plane.nx - 1; gx += m) {
       ++rep.grid_points;
-      const Point3 p((double(gx) + 0.5) * r, (double(gy) + 0.5) * r, robot.scanner_height);
-      const auto o = tree.find_octant(p);
-      if (!o || !free_space(o->label())) {
-        ++rep.not_empty;
-        continue;
-      }
-      const std::size_t i = plane.index(int(gx - x0), int(gy - y0));
-      if (!clear[i]) {
-        ++rep.cylinder_blocked;
-        continue;
-      }
-      if (!std::isfinite(path[i])) {
-        ++rep.unreachable;
-        continue;
-      }
-      const auto scanned_here = [&](const Point3& c) {
-        return std::hypot(c.x - p.x, c.y - p.y) < r;
-      };
-      if (std::any_of(past_scans.begin(), past_scans.end(), scanned_here)) {
-        ++rep.already_scanned;
-        continue;
-      }
-      ++rep.feasible;
-      out.push_back(p);
-      if (path_m) path_m->push_back(double(path[i]) * r);
+      consider(Point3((double(gx) + 0.5) * r, (double(gy) + 0.5) * r, robot.scanner_height), false);
     }
+  for (const Point3& d : params.doorways) {
+    // Inside the plane's border (its cells are never clear), at its leaf cell's centre.
+    octomap::OcTreeKey key;
+    if (!tree.key_of(Point3(d.x, d.y, robot.scanner_height), key)) continue;
+    const std::int64_t cx = leaf_cell(key.k[0]), cy = leaf_cell(key.k[1]);
+    if (cx <= x0 || cy <= y0 || cx >= x0 + plane.nx - 1 || cy >= y0 + plane.ny - 1) continue;
+    ++rep.doorways;
+    consider(Point3((double(cx) + 0.5) * r, (double(cy) + 0.5) * r, robot.scanner_height), true);
   }
   if (report) *report = rep;
   return out;

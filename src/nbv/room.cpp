@@ -36,11 +36,8 @@ std::optional<RoomBox> room_box(const SemiOcTree& tree, const std::vector<Point3
   const std::int64_t x0 = plane.x0, y0 = plane.y0, nx = plane.nx, ny = plane.ny;
   const std::vector<std::uint8_t> free_cell = cells_at_height(tree, plane, height, free_space);
   auto idx = [&](std::int64_t x, std::int64_t y) { return plane.index(int(x), int(y)); };
-  // Seeds: the free cells within kSeedRadius of each scanner. Its own cell is
-  // not free until another scan sees it: the blind zone (minimum range) around
-  // a scanner is occluded.
-  constexpr double kSeedRadius = 1.0;  // m, beyond the minimum range
-  const std::int64_t reach = std::llround(std::ceil(kSeedRadius / r));
+  // Seeds: the free cells within kRoomSeedRadius of each scanner.
+  const std::int64_t reach = std::llround(std::ceil(kRoomSeedRadius / r));
   std::vector<std::size_t> seeds;
   for (const Point3& s : scanners) {
     octomap::OcTreeKey key;

@@ -19,6 +19,37 @@ namespace {
 // thickness (and the leaf of unseen space often left in front of it).
 constexpr double kOpeningReach = 0.5;  // m
 
+// How far an opening's sill line is drawn past its detected edges, in leaves: the
+// detection places an edge within a leaf of the jamb, and rays that pass the gap are
+// seen directly (empty), which would join the rooms on both sides. Past the jamb the
+// line lies in the wall, where nothing is free anyway.
+constexpr double kOpeningOverhangLeaves = 2.0;
+
+// Marks the plane cells under each opening that spans `height` (its sill line, drawn
+// past both edges) as no room cell: the barrier between the rooms it joins.
+void close_openings(std::vector<std::uint8_t>& room_cell, const Plane& plane, double r,
+                    double height, const std::vector<DetectedOpening>& openings) {
+  for (const DetectedOpening& o : openings) {
+    const double bottom = std::min(o.corners[0].z(), o.corners[1].z());
+    const double top = std::max(o.corners[2].z(), o.corners[3].z());
+    if (!(bottom <= height && height <= top)) continue;
+    const Eigen::Vector2d a = o.corners[0].head<2>(), b = o.corners[1].head<2>();
+    const double length = (b - a).norm();
+    if (!(length > 0)) continue;
+    const Eigen::Vector2d u = (b - a) / length;
+    const double reach = kOpeningOverhangLeaves * r;
+    // Steps of a quarter leaf: every cell the line crosses is met (a 4-connected barrier).
+    const int steps = int(std::ceil((length + 2 * reach) / (0.25 * r)));
+    for (int i = 0; i <= steps; ++i) {
+      const Eigen::Vector2d p = a + (-reach + (length + 2 * reach) * double(i) / steps) * u;
+      const std::int64_t x = std::int64_t(std::floor(p.x() / r)) - plane.x0;
+      const std::int64_t y = std::int64_t(std::floor(p.y() / r)) - plane.y0;
+      if (x >= 0 && y >= 0 && x < plane.nx && y < plane.ny)
+        room_cell[plane.index(int(x), int(y))] = 0;
+    }
+  }
+}
+
 }  // namespace
 
 std::optional<std::size_t> RoomMap::room_at(const Point3& p) const {
@@ -31,6 +62,25 @@ std::optional<std::size_t> RoomMap::room_at(const Point3& p) const {
   return std::size_t(id);
 }
 
+std::optional<std::size_t> RoomMap::room_near(const Point3& p, double radius) const {
+  if (room_of_.empty()) return std::nullopt;
+  const std::int64_t px = std::int64_t(std::floor(p.x / leaf_)) - x0_;
+  const std::int64_t py = std::int64_t(std::floor(p.y / leaf_)) - y0_;
+  const auto reach = std::int64_t(std::ceil(radius / leaf_));
+  std::optional<std::size_t> best;
+  std::int64_t best_d2 = 0;
+  for (std::int64_t y = std::max<std::int64_t>(0, py - reach);
+       y <= std::min<std::int64_t>(ny_ - 1, py + reach); ++y)
+    for (std::int64_t x = std::max<std::int64_t>(0, px - reach);
+         x <= std::min<std::int64_t>(nx_ - 1, px + reach); ++x) {
+      const std::int32_t id = room_of_[std::size_t(y) * std::size_t(nx_) + std::size_t(x)];
+      const std::int64_t d2 = (x - px) * (x - px) + (y - py) * (y - py);
+      if (id < 0 || double(d2) * leaf_ * leaf_ > radius * radius) continue;
+      if (!best || d2 < best_d2) best = std::size_t(id), best_d2 = d2;
+    }
+  return best;
+}
+
 RoomMap segment_rooms(const SemiOcTree& tree, double height, double floor_z, double ceiling_z,
                       const std::vector<DetectedOpening>& openings) {
   RoomMap m;
@@ -38,8 +88,9 @@ RoomMap segment_rooms(const SemiOcTree& tree, double height, double floor_z, dou
   const double r = tree.leaf_size();
   const Plane plane = plane_over(tree);
   m.leaf_ = r, m.x0_ = plane.x0, m.y0_ = plane.y0, m.nx_ = plane.nx, m.ny_ = plane.ny;
-  const std::vector<std::uint8_t> free_cell = cells_at_height(
+  std::vector<std::uint8_t> free_cell = cells_at_height(
       tree, plane, height, [](Label l) { return free_space(l) || l == Label::kOut; });
+  close_openings(free_cell, plane, r, height, openings);
   m.room_of_.assign(plane.cells(), -1);
   std::vector<std::size_t> stack;
   for (int y = 0; y < plane.ny; ++y)

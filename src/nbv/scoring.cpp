@@ -135,18 +135,36 @@ double stop_percentage(const SemiOcTree& tree, const Point3& nbv, const ScannerV
 NbvResult next_best_view(const SemiOcTree& tree, const RobotGeometry& robot,
                          const Point3& robot_position, const std::vector<Point3>& past_scans,
                          const NbvParams& params) {
+  const auto t0 = Clock::now();
+  std::vector<double> path_m;
+  CandidateReport report;
+  const std::vector<Point3> positions =
+      find_candidates(tree, robot, robot_position, past_scans, params, &report, &path_m);
+  std::vector<NbvCandidate> candidates;
+  candidates.reserve(positions.size());
+  for (std::size_t i = 0; i < positions.size(); ++i)
+    candidates.push_back({positions[i], 0.0, path_m[i], std::nullopt});
+  const double seconds_candidates = seconds_since(t0);
+  NbvResult res = best_view_among(tree, std::move(candidates), params);
+  res.candidate_report = report;
+  res.seconds_candidates = seconds_candidates;
+  return res;
+}
+
+NbvResult best_view_among(const SemiOcTree& tree, std::vector<NbvCandidate> candidates,
+                          const NbvParams& params) {
   NbvResult res;
   auto t0 = Clock::now();
-  std::vector<double> path_m;
-  const std::vector<Point3> positions = find_candidates(tree, robot, robot_position, past_scans,
-                                                        params, &res.candidate_report, &path_m);
-  res.seconds_candidates = seconds_since(t0);
-  t0 = Clock::now();
+  std::vector<Point3> positions;
+  positions.reserve(candidates.size());
+  for (const NbvCandidate& c : candidates) positions.push_back(c.position);
   const std::vector<Target> targets = targets_for(tree, params);
   const std::vector<double> scores = score_targets(tree, targets, positions, params, &res.scoring);
-  res.candidates.reserve(positions.size());
-  for (std::size_t i = 0; i < positions.size(); ++i)
-    res.candidates.push_back({positions[i], scores[i], path_m[i], std::nullopt});
+  res.candidates = std::move(candidates);
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    res.candidates[i].score = scores[i];
+    res.candidates[i].predicted_overlap.reset();
+  }
   res.seconds_scoring = seconds_since(t0);
   t0 = Clock::now();
   // Best score first (grid order on ties); with a prediction, the first whose scan is

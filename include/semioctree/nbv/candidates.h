@@ -21,8 +21,10 @@ struct RobotGeometry {
 };
 
 struct CandidateReport {
-  std::size_t grid_points = 0;  // grid points over the map
-  std::size_t not_empty = 0;    // octant at scanner height not empty (or outside the map)
+  std::size_t grid_points = 0;   // grid points over the map
+  std::size_t doorways = 0;      // NbvParams::doorways on the plane (tested as grid points are)
+  std::size_t not_empty = 0;     // octant at scanner height not empty (or outside the map)
+  std::size_t outside_area = 0;  // where NbvParams::may_stand forbids
   std::size_t cylinder_blocked = 0;
   std::size_t unreachable = 0;
   std::size_t already_scanned = 0;  // within a leaf of a past scan's optical centre
@@ -42,16 +44,16 @@ double floor_layer_clearance(const RobotGeometry& robot, double leaf_size);
 PlatformBody platform_body(const RobotGeometry& robot, double leaf_size);
 
 // Feasible candidate positions (scanner positions, z = scanner height), in grid
-// order (y, then x). `robot_position`: the robot on the floor (z ignored);
-// `past_scans`: optical centres of the scans so far (their blind zones; and a grid
-// point within a leaf of one is no candidate: in a static scene a scan from there would
-// see again what that scan saw, whatever the scoring's targets say). Uses
-// candidate_spacing, grid_anchor, limits and blind_zone_is_free of `params`.
-// `path_m` (if given) gets each candidate's shortest path from the robot over the
-// cells its safety cylinder clears, m: steps between leaf cells, diagonal ones only
-// where the robot does not cut a corner (docs/nbv.md, "Path"). Throws
-// std::invalid_argument for a radius < 0 or a scanner height <= 0, or a grid anchor
-// beyond the key range.
+// order (y, then x), then the feasible doorways (at their leaf cell's centre), on space seen free
+// (and, with stand_beyond_openings, seen through an opening) where may_stand allows.
+// `robot_position`: the robot on the floor (z ignored); `past_scans`: optical centres of the scans
+// so far (their blind zones; and a grid point within a leaf of one is no candidate: in a static
+// scene a scan from there would see again what that scan saw, whatever the scoring's targets say).
+// Uses candidate_spacing, grid_anchor, limits, blind_zone_is_free, may_stand, stand_beyond_openings
+// and doorways of `params`. `path_m` (if given) gets each candidate's shortest path from the robot
+// over the cells its safety cylinder clears, m: steps between leaf cells, diagonal ones only where
+// the robot does not cut a corner (docs/nbv.md, "Path"). Throws std::invalid_argument for a radius
+// < 0 or a scanner height <= 0, or a grid anchor beyond the key range.
 std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry& robot,
                                     const Point3& robot_position,
                                     const std::vector<Point3>& past_scans, const NbvParams& params,

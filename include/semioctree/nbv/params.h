@@ -33,6 +33,16 @@ struct NbvParams {
   // The surveyed room (room_box): occluded space outside it is no target and
   // Eq 5 counts volumes inside it only. Empty: the whole map, as the paper reads.
   std::optional<RoomBox> room;
+  // Where a candidate may stand (x, y of the scanner): the survey area, a room. Empty:
+  // wherever the robot can reach.
+  std::function<bool(const Point3&)> may_stand;
+  // Candidates may also stand on space seen only through an opening (out): the rooms
+  // beyond the doors of a floor survey. false: only on space seen directly.
+  bool stand_beyond_openings = false;
+  // Scanner positions in door openings (x, y: the door's centre), tried after the grid
+  // points as they are, on door octants too: a scan from a doorway sees both rooms (the
+  // floor survey's linking scan into a room not seen yet).
+  std::vector<Point3> doorways;
   // Registration-safe candidates (docs/nbv.md): with `overlap_top` set (the map's top,
   // m above its floor at z = 0), the chosen candidate's scan overlap with the map is
   // predicted (predict_overlap, rays `overlap_ray_step_deg` apart, floor and ceiling

@@ -18,9 +18,14 @@ struct RoomBox {
   double overlap(const Point3& c, double size) const;
 };
 
+// A scanner's own cell is not free until another scan sees it (the blind zone of its
+// minimum range): the room it stands in is found from the free cells within this
+// distance of it, m.
+constexpr double kRoomSeedRadius = 1.0;
+
 // The room the scanners stand in, read from the map: the bounding box of the
 // free (empty, scan, nbv) leaf cells of the plane at `height` 4-connected to
-// the free cells within 1 m of a scanner, grown by one leaf on each side, from
+// the free cells within kRoomSeedRadius of a scanner, grown by one leaf on each side, from
 // floor_z to ceiling_z. std::nullopt when the map is empty, ceiling_z <= floor_z,
 // or no scanner has a free cell within 1 m at that height.
 std::optional<RoomBox> room_box(const SemiOcTree& tree, const std::vector<Point3>& scanners,

@@ -33,6 +33,10 @@ class RoomMap {
   const std::vector<OpeningLink>& links() const { return links_; }
   // The room whose free cell holds p (x, y; z ignored); none elsewhere.
   std::optional<std::size_t> room_at(const Point3& p) const;
+  // The room of the room cell nearest p (x, y) within `radius` m (centre to centre; ties
+  // in grid order); none without one. A scanner's own cell is not free until another
+  // scan sees it (its blind zone): its room is the one around it.
+  std::optional<std::size_t> room_near(const Point3& p, double radius) const;
 
  private:
   friend RoomMap segment_rooms(const SemiOcTree&, double, double, double,

@@ -62,6 +62,13 @@ NbvResult next_best_view(const SemiOcTree& tree, const RobotGeometry& robot,
                          const Point3& robot_position, const std::vector<Point3>& past_scans,
                          const NbvParams& params = {});
 
+// The NBV step after the candidates: scores `candidates` (positions and paths as
+// find_candidates gives them; scores and predictions are set here), the best one under
+// the overlap rule and its stop percentage. candidate_report and seconds_candidates are
+// left empty. Throws as score_positions.
+NbvResult best_view_among(const SemiOcTree& tree, std::vector<NbvCandidate> candidates,
+                          const NbvParams& params = {});
+
 // Eq 5 for a scanner at `nbv` (its optical centre), in percent: the method-1
 // expected occluded volume seen over the volume of all but unknown space;
 // inside `room` only if given. 0 for a map without counted volume.

@@ -64,6 +64,12 @@ class SimulatedPlatform : public ScanPlatform {
   unsigned threads() const { return threads_; }
   // Survey frame → world: the first scan's estimate against its true pose.
   const Eigen::Isometry3d& survey_to_world() const { return survey_to_world_; }
+  // Whether the scene lets the robot stand at `p` (survey frame, x and y): inside its
+  // survey_area polygon, or anywhere without one. For SurveyParams::may_stand.
+  bool in_survey_area(const Point3& p) const;
+  // SurveyParams::may_stand for this platform (it must outlive the survey): in_survey_area,
+  // or empty when the scene has no survey_area.
+  std::function<bool(const Point3&)> survey_area_rule() const;
   // The true optical centre of every placed scan.
   const std::vector<Eigen::Vector3d>& optical_centres() const { return optical_centres_; }
 
