@@ -117,6 +117,28 @@ void ReturnDirections::open_within(const PlatformBody& body, double min_range) {
   }
 }
 
+void ReturnDirections::open_where_free(const SemiOcTree& map, const Point3& optical_centre,
+                                       double min_range) {
+  if (!(min_range > 0) || map.coarse_count() == 0) return;
+  const DirectionBins& b = direction_bins();
+  auto seen_free = [](Label l) {
+    return l == Label::kEmpty || l == Label::kScan || l == Label::kNbv || l == Label::kOut ||
+           l == Label::kDoor || l == Label::kWindow;
+  };
+  for (int r = 0; r < DirectionBins::kRows; ++r)
+    for (int i = 0; i < b.count[r]; ++i) {
+      std::uint8_t& bin = bins_[std::size_t(b.first[r] + i)];
+      if (bin) continue;
+      const Eigen::Vector3d d = min_range * b.centre(r, i);
+      const Point3 end(optical_centre.x + d.x(), optical_centre.y + d.y(),
+                       optical_centre.z + d.z());
+      const TraversalEnd e = map.traverse(optical_centre, end, [&](const RayStep& step) {
+        return step.node && seen_free(step.label());
+      });
+      if (e == TraversalEnd::kReachedEnd) bin = 1;
+    }
+}
+
 bool ReturnDirections::has(double dx, double dy, double dz) const {
   const DirectionBins& b = direction_bins();
   const int r = b.row_of(dx, dy, dz);
@@ -135,6 +157,7 @@ std::shared_ptr<const ReturnDirections> return_directions(const Cloud& scan,
   r->close_gaps();
   if (options.open_above) r->open_above();
   r->open_within(options.body, options.min_range);
+  if (options.map) r->open_where_free(*options.map, options.optical_centre, options.min_range);
   return r;
 }
 

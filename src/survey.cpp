@@ -243,6 +243,10 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
   returns.open_above = !pre.ceiling_found;
   if (in.from_robot) returns.body = platform_body(params_.robot, params_.map.grid.leaf);
   returns.min_range = params_.map.limits.min_range;
+  if (!map_.empty()) {  // what the scans before saw free around this one
+    returns.map = &map_.tree();
+    returns.optical_centre = scanner;
+  }
   rec.update = map_.add_scan(*registered, scanner, pre.ceiling_height,
                              return_directions(*seen, rec.scanner_to_survey.linear(), returns));
   rec.seconds.occupancy = rec.update.seconds_occupancy;

@@ -2,6 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "semioctree/sim/ground_truth.h"
 #include "semioctree/sim/scene.h"
@@ -188,6 +191,23 @@ TEST(FloorPlan, DefaultSurveyAreaIsTheReachableFreeFloor) {
   EXPECT_FALSE(plan.in_survey_area({3.0, 2.0}));
   EXPECT_FALSE(plan.in_survey_area({7.0, 1.35}));
   EXPECT_TRUE(plan.in_survey_area(s.robot.start));
+}
+
+// The floors of rooms the floor survey is tried on: rooms enclosed by walls, every one
+// reachable by the robot from its start through the doors.
+TEST(FloorPlan, ShippedFloorsHaveRoomsTheRobotReaches) {
+  for (const auto& [file, rooms] : {std::pair<std::string, int>{"office-floor", 10},
+                                    std::pair<std::string, int>{"apartment", 6}}) {
+    const Scene scene = load_scene_json(kScenes + "/" + file + ".scene.json");
+    const GroundTruth truth(scene);
+    const FloorPlan plan = truth.floor_plan(0.05);
+    ASSERT_EQ(int(plan.room_area.size()), rooms) << file;
+    std::vector<bool> reached(plan.room_area.size(), false);
+    for (std::size_t i = 0; i < plan.room.size(); ++i)
+      if (plan.room[i] >= 0 && plan.reachable[i]) reached[std::size_t(plan.room[i])] = true;
+    for (int r = 0; r < rooms; ++r) EXPECT_TRUE(reached[std::size_t(r)]) << file << " room " << r;
+    EXPECT_TRUE(scene.survey_area) << file;  // the whole floor
+  }
 }
 
 }  // namespace

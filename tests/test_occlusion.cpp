@@ -506,6 +506,42 @@ TEST(Occlusion, NoReturnsThroughAWindowHideNothingFromAPlatformAsWideAsTheMinimu
   robot.radius = 0.3;  // narrower than the minimum range: still hidden
   const auto narrow = study(robot);
   EXPECT_EQ(label_at(*narrow, before_window), Label::kOccluded);
+
+  // Narrower, but where the scans before saw the space around the scanner free (the
+  // map of a scan from 1.2 m behind it): nothing lay within the minimum range there
+  // either, so the beams through the window met nothing within range (open_where_free).
+  const Point3 behind(1.0, 3.2, 1.2);
+  Cloud seen_behind;
+  for (const auto& p : world)
+    seen_behind.push_back(
+        pcl::PointXYZ{float(p.x - behind.x), float(p.y - behind.y), float(p.z - behind.z)});
+  auto before = discretize(world, 2.4, {0.05, 0.8});
+  ScannerView from_behind{behind};
+  from_behind.returns = return_directions(seen_behind, Eigen::Matrix3d::Identity());
+  study_occlusion(*before, {from_behind});
+  for (const Point3& near : {Point3(1.5, 2.0, 1.2), Point3(1.0, 1.5, 1.2), Point3(1.3, 2.3, 1.4)})
+    ASSERT_EQ(label_at(*before, near), Label::kEmpty);
+  auto with_map = discretize(world, 2.4, {0.05, 0.8});
+  ReturnDirectionsOptions options;
+  options.body = robot;
+  options.min_range = 0.6;
+  options.map = before.get();
+  options.optical_centre = scanner;
+  ScannerView view{scanner};
+  view.returns = return_directions(seen, Eigen::Matrix3d::Identity(), options);
+  study_occlusion(*with_map, {view});
+  EXPECT_EQ(label_at(*with_map, before_window), Label::kEmpty);
+  // A scan's own map leaves its blind zone (within the minimum range) hidden: it opens
+  // nothing for a scan from the same place.
+  options.map = tripod.get();
+  ReturnDirections none = *return_directions(seen, Eigen::Matrix3d::Identity(), options);
+  EXPECT_EQ(none.bins_with_returns(), return_directions(seen, Eigen::Matrix3d::Identity(),
+                                                        [&] {
+                                                          ReturnDirectionsOptions o = options;
+                                                          o.map = nullptr;
+                                                          return o;
+                                                        }())
+                                          ->bins_with_returns());
 }
 
 // The same wall 0.4 m from the scanner, in an OctoMap map made by casting the scan's rays

@@ -58,6 +58,14 @@ class ReturnDirections {
   // and the space along it is free, not hidden. A body narrower than the minimum range
   // opens only the steep directions it holds (docs/occlusion.md).
   void open_within(const PlatformBody& body, double min_range);
+  // For a scan taken where the map of the scans before already holds the space around
+  // it: every direction without returns whose segment from `optical_centre` to
+  // `min_range` lies in space `map` holds as free (seen empty, directly or through an
+  // opening, or an opening's own octants) counts as having returns. As in open_within,
+  // nothing can lie nearer than the minimum range there, so the beam met nothing within
+  // the maximum range: it left through a window or a door the map does not see beyond.
+  // A bin is judged by its centre direction.
+  void open_where_free(const SemiOcTree& map, const Point3& optical_centre, double min_range);
   bool has(double dx, double dy, double dz) const;
   std::size_t bins_with_returns() const;
 
@@ -70,6 +78,10 @@ struct ReturnDirectionsOptions {
   bool open_above = false;  // the scan found no ceiling: open_above()
   PlatformBody body;        // the platform it was taken from: open_within(body, min_range)
   double min_range = 0.6;   // the scanner's minimum range, m
+  // The map of the scans before and the scan's optical centre in it:
+  // open_where_free(*map, optical_centre, min_range). Null: not used (a first scan).
+  const SemiOcTree* map = nullptr;
+  Point3 optical_centre;
 };
 // Options with only open_above set: a scan whose platform is not known (a tripod, a file).
 inline ReturnDirectionsOptions open_above_if(bool open_above) {
@@ -80,7 +92,7 @@ inline ReturnDirectionsOptions open_above_if(bool open_above) {
 
 // The returns of a scan given in the scanner's frame (optical centre at the origin),
 // turned into the map frame by `scanner_to_map` (its translation is ignored), gaps closed,
-// then opened as `options` say.
+// then opened as `options` say (open_above, open_within, open_where_free).
 std::shared_ptr<const ReturnDirections> return_directions(
     const Cloud& scan, const Eigen::Matrix3d& scanner_to_map,
     const ReturnDirectionsOptions& options = {});
