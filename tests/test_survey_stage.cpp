@@ -288,6 +288,29 @@ TEST(SurveyStage, RecoveriesComeNearerTheLastPlacedScanAndAreBounded) {
   }
 }
 
+// Walls 0.2 m thick around the rectangle x ∈ [0, x1], y ∈ [0, y1] (their inner faces on
+// its sides), `height` high.
+nlohmann::json walls_around(double x1, double y1, double height) {
+  const double c[5][2] = {
+      {-0.1, -0.1}, {x1 + 0.1, -0.1}, {x1 + 0.1, y1 + 0.1}, {-0.1, y1 + 0.1}, {-0.1, -0.1}};
+  nlohmann::json walls = nlohmann::json::array();
+  for (int i = 0; i < 4; ++i)
+    walls.push_back(
+        {{"from", {c[i][0], c[i][1]}}, {"to", {c[i + 1][0], c[i + 1][1]}}, {"z1", height}});
+  return walls;
+}
+
+// `scene` written as a scene file in a fresh temp dir and read back as `survey --scene`
+// reads it.
+sim::Scene written_and_read(const std::string& name, const nlohmann::json& scene) {
+  const std::filesystem::path dir = testing::temp_dir(name);
+  const std::filesystem::path file = dir / (name + ".scene.json");
+  std::ofstream(file) << scene.dump(1);
+  sim::Scene loaded = sim::load_scene(file.string());
+  std::filesystem::remove_all(dir);
+  return loaded;
+}
+
 // A 6 × 4 m room of walls `wall_height` high with a table, a ceiling slab at `ceiling`
 // (0: none), and the scanner's elevation limit; written as a scene file in a fresh temp
 // dir and read back as `survey --scene` reads it, with a coarse scanner (0.4° steps).
@@ -295,12 +318,7 @@ sim::Scene room_scene(const std::string& name, double wall_height, double ceilin
                       double elevation_max_deg) {
   using nlohmann::json;
   const json outline = {{-0.2, -0.2}, {6.2, -0.2}, {6.2, 4.2}, {-0.2, 4.2}};
-  json walls = json::array();
-  const double corners[5][2] = {{-0.1, -0.1}, {6.1, -0.1}, {6.1, 4.1}, {-0.1, 4.1}, {-0.1, -0.1}};
-  for (int i = 0; i < 4; ++i)
-    walls.push_back({{"from", {corners[i][0], corners[i][1]}},
-                     {"to", {corners[i + 1][0], corners[i + 1][1]}},
-                     {"z1", wall_height}});
+  const json walls = walls_around(6.0, 4.0, wall_height);
   json slabs = {{{"polygon", outline}, {"z0", -0.2}, {"z1", 0.0}}};
   if (ceiling > 0) slabs.push_back({{"polygon", outline}, {"z0", ceiling}, {"z1", ceiling + 0.2}});
   const json scene = {
@@ -315,12 +333,7 @@ sim::Scene room_scene(const std::string& name, double wall_height, double ceilin
        {{"azimuth_step_deg", 0.4},
         {"elevation_step_deg", 0.4},
         {"elevation_max_deg", elevation_max_deg}}}};
-  const std::filesystem::path dir = testing::temp_dir(name);
-  const std::filesystem::path file = dir / (name + ".scene.json");
-  std::ofstream(file) << scene.dump(1);
-  sim::Scene loaded = sim::load_scene(file.string());
-  std::filesystem::remove_all(dir);
-  return loaded;
+  return written_and_read(name, scene);
 }
 
 // The survey of `scene` with the NBV policy, up to 6 scans: it must end by its stop
@@ -376,12 +389,7 @@ TEST(SurveyStage, AScannerThatCannotSeeTheCeilingSurveysTheRoom) {
 sim::Scene two_room_scene(const std::string& name, bool west_only) {
   using nlohmann::json;
   const json outline = {{-0.3, -0.3}, {8.5, -0.3}, {8.5, 3.8}, {-0.3, 3.8}};
-  json walls = json::array();
-  const double corners[5][2] = {{-0.1, -0.1}, {8.3, -0.1}, {8.3, 3.6}, {-0.1, 3.6}, {-0.1, -0.1}};
-  for (int i = 0; i < 4; ++i)
-    walls.push_back({{"from", {corners[i][0], corners[i][1]}},
-                     {"to", {corners[i + 1][0], corners[i + 1][1]}},
-                     {"z1", 2.6}});
+  json walls = walls_around(8.2, 3.5, 2.6);
   walls.push_back(
       {{"from", {4.1, 0.0}},
        {"to", {4.1, 3.5}},
@@ -401,12 +409,7 @@ sim::Scene two_room_scene(const std::string& name, bool west_only) {
       {"robot", {{"start", {1.5, 1.2}}, {"radius", 0.25}}},
       {"scanner", {{"azimuth_step_deg", 0.4}, {"elevation_step_deg", 0.4}}}};
   if (west_only) scene["survey_area"] = {{0.0, 0.0}, {4.0, 0.0}, {4.0, 3.5}, {0.0, 3.5}};
-  const std::filesystem::path dir = testing::temp_dir(name);
-  const std::filesystem::path file = dir / (name + ".scene.json");
-  std::ofstream(file) << scene.dump(1);
-  sim::Scene loaded = sim::load_scene(file.string());
-  std::filesystem::remove_all(dir);
-  return loaded;
+  return written_and_read(name, scene);
 }
 
 // The true x of every scan the survey placed.
