@@ -332,11 +332,6 @@ std::vector<std::pair<int, int>> column_runs(const std::vector<std::size_t>& col
   return runs;
 }
 
-// The centre of an opening's rectangle.
-Eigen::Vector3d rectangle_centre(const DetectedOpening& o) {
-  return 0.25 * (o.corners[0] + o.corners[1] + o.corners[2] + o.corners[3]);
-}
-
 // A hole through a wall is a hole in both of its faces: once a scan stood beyond the
 // wall (through one of its doors), the same opening is found on the far face too. Of two
 // openings of one kind on parallel planes less than a wall's thickness apart whose
@@ -362,7 +357,7 @@ std::vector<DetectedOpening> drop_far_faces(std::vector<DetectedOpening> found,
       const DetectedOpening &a = found[i], &b = found[j];
       if (dropped[i] || dropped[j] || a.kind != b.kind) continue;
       if (std::abs(a.wall_normal.dot(b.wall_normal)) < parallel) continue;
-      const Eigen::Vector3d ca = rectangle_centre(a), cb = rectangle_centre(b);
+      const Eigen::Vector3d ca = a.centre(), cb = b.centre();
       if (std::abs((cb - ca).dot(a.wall_normal)) > p.max_wall_thickness) continue;
       const Eigen::Vector3d u(-a.wall_normal.y(), a.wall_normal.x(), 0.0);
       const auto [au0, au1] = extent(a, u);
@@ -625,7 +620,7 @@ double share_carved_behind(const DetectedOpening& o, const octomap::OcTree& map,
   const double r = map.getResolution();
   const Eigen::Vector3d along = o.corners[1] - o.corners[0];
   const Eigen::Vector3d up = o.corners[3] - o.corners[0];
-  const Eigen::Vector3d centre = rectangle_centre(o);
+  const Eigen::Vector3d centre = o.centre();
   // Beyond: the side of the plane with fewer scanners (the room is where they stand).
   Eigen::Vector3d beyond = o.wall_normal;
   int facing = 0;

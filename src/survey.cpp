@@ -322,8 +322,7 @@ namespace {
 // centre, floor to `top`: the targets a doorway scan is judged by. A wall along neither
 // axis gives the square around the door (both sides).
 RoomBox beyond_door(const DetectedOpening& door, int side, double reach, double top) {
-  const Eigen::Vector3d c =
-      0.25 * (door.corners[0] + door.corners[1] + door.corners[2] + door.corners[3]);
+  const Eigen::Vector3d c = door.centre();
   RoomBox box{Point3(c.x() - reach, c.y() - reach, 0.0), Point3(c.x() + reach, c.y() + reach, top)};
   const Eigen::Vector3d n = double(side) * door.wall_normal;
   constexpr double kAlongAxis = 0.985;  // within 10° of an axis
@@ -338,8 +337,7 @@ RoomBox beyond_door(const DetectedOpening& door, int side, double reach, double 
 
 std::vector<Eigen::Vector3d> Survey::doorway_positions(const DetectedOpening& door) const {
   const double r = map_.tree().leaf_size();
-  const Eigen::Vector3d c =
-      0.25 * (door.corners[0] + door.corners[1] + door.corners[2] + door.corners[3]);
+  const Eigen::Vector3d c = door.centre();
   // In the opening, and in front of it on either side: where the robot's cylinder
   // clears the wall's face (the opening's corners lie on one face) and the scanner,
   // looking down no steeper than its lowest elevation, sees the floor just beyond the
@@ -496,7 +494,7 @@ void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& rob
   for (const OpeningLink& link : rooms.links()) {
     const DetectedOpening& o = openings[link.opening];
     if (o.kind != OpeningKind::kDoor) continue;
-    const Eigen::Vector3d c = 0.25 * (o.corners[0] + o.corners[1] + o.corners[2] + o.corners[3]);
+    const Eigen::Vector3d c = o.centre();
     if (std::any_of(doors_looked_through_.begin(), doors_looked_through_.end(),
                     [&](const Point3& d) { return std::hypot(d.x - c.x(), d.y - c.y()) < 2 * r; }))
       continue;
@@ -521,7 +519,7 @@ void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& rob
     NbvResult res = best_view_among(tree, {*plan.doorway}, beyond);
     if (!res.best || res.best->score <= 0) continue;
     const DetectedOpening& o = openings[plan.door];
-    const Eigen::Vector3d c = 0.25 * (o.corners[0] + o.corners[1] + o.corners[2] + o.corners[3]);
+    const Eigen::Vector3d c = o.centre();
     doors_looked_through_.push_back(Point3(c.x(), c.y(), height));
     rec.planned_doorway = plan.door;
     rec.room = beyond.room;

@@ -94,6 +94,10 @@ struct DetectedOpening {
   // World (levelled) frame, in the wall plane: bottom-near, bottom-far,
   // top-far, top-near ("near" = smaller coordinate along the wall).
   std::array<Eigen::Vector3d, 4> corners;
+  // The centre of its rectangle.
+  Eigen::Vector3d centre() const {
+    return 0.25 * (corners[0] + corners[1] + corners[2] + corners[3]);
+  }
   double width = 0, height = 0;  // m
   double sill = 0;               // bottom above the floor, m (≈ 0 for doors)
   double los_fraction = 0;       // share of its cells with direct LOS from a scanner

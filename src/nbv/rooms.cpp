@@ -127,7 +127,7 @@ RoomMap segment_rooms(const SemiOcTree& tree, double height, double floor_z, dou
   const int steps = int(std::ceil(kOpeningReach / r));
   for (std::size_t i = 0; i < openings.size(); ++i) {
     const DetectedOpening& o = openings[i];
-    const Eigen::Vector3d c = 0.25 * (o.corners[0] + o.corners[1] + o.corners[2] + o.corners[3]);
+    const Eigen::Vector3d c = o.centre();
     OpeningLink link;
     link.opening = i;
     for (const int side : {1, -1}) {
