@@ -21,6 +21,15 @@ namespace semioctree {
 
 namespace {
 
+// `facing` for the source placed by `placement` (its viewpoint moved along); empty
+// without one.
+SurfaceFacing facing_at(const SurfaceFacing* facing, const Eigen::Isometry3d& placement) {
+  if (!facing) return {};
+  SurfaceFacing placed = *facing;
+  placed.source_viewpoint = placement * facing->source_viewpoint;
+  return placed;
+}
+
 constexpr double kDeg = 180.0 / M_PI;
 
 // The (x, y) of the points on vertical surfaces: the cloud thinned to `spacing`
@@ -106,7 +115,8 @@ std::string describe_hypothesis(const GlobalHypothesis& h) {
 }  // namespace
 
 GlobalAlignResult global_align(const Cloud& source, const Cloud& target,
-                               const RegistrationParams& reg, const GlobalAlignParams& p) {
+                               const RegistrationParams& reg, const GlobalAlignParams& p,
+                               const SurfaceFacing* facing) {
   const auto t0 = Clock::now();
   if (!(p.cell > 0) || !(reg.max_correspondence > p.cell) || p.hypotheses < 1 ||
       !(p.ambiguity_ratio >= 0 && p.ambiguity_ratio <= 1) ||
@@ -299,7 +309,9 @@ GlobalAlignResult global_align(const Cloud& source, const Cloud& target,
     Cloud placed;
     pcl::transformPointCloud(*source_thin, placed, guess.matrix().cast<float>());
     try {
-      const RegistrationResult icp = register_scan(placed, *target_thin, coarse);
+      const SurfaceFacing placed_facing = facing_at(facing, guess);
+      const RegistrationResult icp =
+          register_scan(placed, *target_thin, coarse, facing ? &placed_facing : nullptr);
       h.screened = icp.correction * guess;
       h.overlap = icp.overlap;
     } catch (const RegistrationError&) {
@@ -325,7 +337,8 @@ GlobalAlignResult global_align(const Cloud& source, const Cloud& target,
     Cloud placed;
     pcl::transformPointCloud(source, placed, h.screened.matrix().cast<float>());
     ++r.verified;
-    return register_scan(placed, target, reg);
+    const SurfaceFacing placed_facing = facing_at(facing, h.screened);
+    return register_scan(placed, target, reg, facing ? &placed_facing : nullptr);
   };
   std::string first_failure;
   bool found = false;

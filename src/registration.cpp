@@ -40,17 +40,40 @@ class Icp : public pcl::IterativeClosestPoint<PointN, PointN, double> {
 // not match at all) visits a large part of the tree. Searching only within the
 // correspondence distance gives the same correspondences, several times faster
 // on such points (a uniform-noise source: 0.64 → 0.23 s per iteration).
+//
+// With the surfaces' facing known (SurfaceFacing), a source point with a normal pairs
+// with the nearest target point within the bound whose surface faces the same way (or
+// whose facing is unknown): the two faces of a wall are not confused.
 class BoundedKdTree : public pcl::search::KdTree<PointN> {
  public:
   using Ptr = pcl::shared_ptr<BoundedKdTree>;
   void set_bound(double distance) { bound_ = distance; }
+  // Per target point: 1 if its normal is oriented (the side it was seen from), 0 if not.
+  void set_oriented(std::vector<std::uint8_t> oriented) { oriented_ = std::move(oriented); }
   using pcl::search::KdTree<PointN>::nearestKSearch;
   int nearestKSearch(const PointN& point, int k, pcl::Indices& indices,
                      std::vector<float>& sqr_distances) const override {
     if (k != 1 || !(bound_ > 0))
       return pcl::search::KdTree<PointN>::nearestKSearch(point, k, indices, sqr_distances);
-    // A radius search keeping one neighbour returns the nearest within the radius.
-    if (radiusSearch(point, bound_, indices, sqr_distances, 1) > 0) return 1;
+    const Eigen::Vector3f n = point.getNormalVector3fMap();
+    if (oriented_.empty() || n.squaredNorm() < 0.5f) {
+      // A radius search keeping one neighbour returns the nearest within the radius.
+      if (radiusSearch(point, bound_, indices, sqr_distances, 1) > 0) return 1;
+    } else {
+      // The nearest few, nearest first: the first on a surface facing the same way.
+      constexpr unsigned kFacingCandidates = 8;
+      pcl::Indices near;
+      std::vector<float> d2;
+      const int found = radiusSearch(point, bound_, near, d2, kFacingCandidates);
+      for (int i = 0; i < found; ++i) {
+        const PointN& t = (*input_)[near[i]];
+        if (!oriented_[near[i]] || n.dot(t.getNormalVector3fMap()) > 0.0f) {
+          indices.assign(1, near[i]);
+          sqr_distances.assign(1, d2[i]);
+          return 1;
+        }
+      }
+    }
     // None: report one "infinitely far" neighbour, which the caller rejects.
     indices.assign(1, 0);
     sqr_distances.assign(1, std::numeric_limits<float>::infinity());
@@ -59,6 +82,7 @@ class BoundedKdTree : public pcl::search::KdTree<PointN> {
 
  private:
   double bound_ = 0;
+  std::vector<std::uint8_t> oriented_;
 };
 
 // Voxel-grid downsampling (one centroid per occupied voxel). PCL's VoxelGrid
@@ -149,6 +173,37 @@ std::size_t estimate_normals(CloudN& cloud, const pcl::search::KdTree<PointN>& t
   return with_normal;
 }
 
+// Orients the target's normals towards the side their surface was seen from
+// (SurfaceFacing::target_side; `offset` shifts the cloud back to the caller's frame).
+// Returns per point 1 if oriented, 0 if not.
+std::vector<std::uint8_t> orient_target(CloudN& cloud, const Eigen::Vector3d& offset,
+                                        const SurfaceFacing& facing) {
+  std::vector<std::uint8_t> oriented(cloud.size(), 0);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    PointN& q = cloud[i];
+    Eigen::Vector3f n = q.getNormalVector3fMap();
+    if (n.squaredNorm() < 0.5f) continue;
+    const Eigen::Vector3d at = q.getVector3fMap().cast<double>() + offset;
+    const int side = facing.target_side(at, n.cast<double>());
+    if (side == 0) continue;
+    if (side < 0) q.getNormalVector3fMap() = -n;
+    oriented[i] = 1;
+  }
+  return oriented;
+}
+
+// Normals of `cloud` (estimate_normals within `radius`) turned towards `viewpoint`.
+void normals_facing(CloudN& cloud, double radius, const Eigen::Vector3f& viewpoint) {
+  if (cloud.empty()) return;
+  pcl::search::KdTree<PointN> tree;
+  tree.setInputCloud(pcl::make_shared<CloudN>(cloud));
+  estimate_normals(cloud, tree, radius);
+  for (PointN& q : cloud) {
+    const Eigen::Vector3f n = q.getNormalVector3fMap();
+    if (n.dot(viewpoint - q.getVector3fMap()) < 0.0f) q.getNormalVector3fMap() = -n;
+  }
+}
+
 std::string describe(const RegistrationResult& r, const RegistrationParams& p) {
   std::ostringstream m;
   m << "fitness " << r.fitness << " m² (bound " << p.max_fitness << "), overlap " << r.overlap
@@ -169,7 +224,7 @@ Eigen::Isometry3d planar_pose(double x, double y, double yaw_deg) {
 }
 
 RegistrationResult register_scan(const Cloud& source, const Cloud& target,
-                                 const RegistrationParams& p) {
+                                 const RegistrationParams& p, const SurfaceFacing* facing) {
   const auto t0 = Clock::now();
   if (!(p.voxel > 0) || !(p.final_correspondence > 0) ||
       !(p.max_correspondence >= p.final_correspondence) || p.max_iterations < 1)
@@ -213,6 +268,16 @@ RegistrationResult register_scan(const Cloud& source, const Cloud& target,
       << " target points have a surface normal (need at least " << p.min_points << ")";
     throw RegistrationError(m.str());
   }
+  // Which way the surfaces face: the target's from where they were seen, the source's
+  // towards its scanner (per stage, on that stage's sampling).
+  Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();
+  if (facing) viewpoint = (facing->source_viewpoint - offset).cast<float>();
+  if (facing && facing->target_side) tree->set_oriented(orient_target(*tgt, offset, *facing));
+  auto source_at = [&](const CloudN::Ptr& cloud, double voxel) {
+    if (facing && facing->target_side) normals_facing(*cloud, 4.0 * voxel, viewpoint);
+    return cloud;
+  };
+  source_at(src, p.voxel);
 
   Icp icp;
   if (p.planar) {
@@ -250,9 +315,10 @@ RegistrationResult register_scan(const Cloud& source, const Cloud& target,
     // quarter of the correspondence distance is plenty, and makes the first
     // stage, where most iterations happen, several times cheaper.
     const double stage_voxel = d / 4.0;
-    icp.setInputSource(stage_voxel > 1.2 * p.voxel
-                           ? shifted(*voxel_downsample(*src_ds, stage_voxel), offset)
-                           : src);
+    icp.setInputSource(
+        stage_voxel > 1.2 * p.voxel
+            ? source_at(shifted(*voxel_downsample(*src_ds, stage_voxel), offset), stage_voxel)
+            : src);
     icp.setMaxCorrespondenceDistance(d);
     tree->set_bound(d * 1.0001);
     CloudN aligned;
@@ -273,17 +339,19 @@ RegistrationResult register_scan(const Cloud& source, const Cloud& target,
         pcl::registration::DefaultConvergenceCriteria<double>::CONVERGENCE_CRITERIA_ITERATIONS;
   }
   CloudN aligned;
-  pcl::transformPointCloud(*src, aligned, estimate);
+  pcl::transformPointCloudWithNormals(*src, aligned, estimate);
 
   // Fitness and overlap over the final correspondence distance, against every
-  // downsampled target point (PCL's getFitnessScore, plus the inlier share).
+  // downsampled target point (PCL's getFitnessScore, plus the inlier share; with the
+  // facing known, on surfaces facing the same way).
   pcl::Indices nn(1);
   std::vector<float> d2(1);
   const double max_d2 = p.final_correspondence * p.final_correspondence;
   double sum = 0;
   std::size_t inliers = 0;
+  tree->set_bound(p.final_correspondence);
   for (const auto& q : aligned) {
-    if (tree->radiusSearch(q, p.final_correspondence, nn, d2, 1) > 0 && d2[0] <= max_d2) {
+    if (tree->nearestKSearch(q, 1, nn, d2) > 0 && d2[0] <= max_d2) {
       sum += d2[0];
       ++inliers;
     }

@@ -7,7 +7,9 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <stdexcept>
+#include <utility>
 
 #include "semioctree/timing.h"
 
@@ -92,14 +94,18 @@ std::optional<double> ScanRecord::stop_percent() const {
 
 NextScanChoice BestScorePolicy::choose(const ScanRecord& scan, const SurveyMap&) {
   if (!scan.nbv.best) throw std::logic_error("BestScorePolicy: no candidate to choose from");
-  return {scan.nbv.best->position, std::nullopt};
+  NextScanChoice choice;
+  choice.position = scan.nbv.best->position;
+  return choice;
 }
 
 NextScanChoice RandomCandidatePolicy::choose(const ScanRecord& scan, const SurveyMap&) {
   const std::vector<NbvCandidate>& c = scan.nbv.candidates;
   if (c.empty()) throw std::logic_error("RandomCandidatePolicy: no candidate to choose from");
   std::uniform_int_distribution<std::size_t> pick(0, c.size() - 1);
-  return {c[pick(rng_)].position, std::nullopt};
+  NextScanChoice choice;
+  choice.position = c[pick(rng_)].position;
+  return choice;
 }
 
 Survey::Survey(const SurveyParams& params, SurveyObserver* observer)
@@ -138,14 +144,12 @@ RegistrationResult as_correction(const GlobalAlignResult& g) {
 
 }  // namespace
 
-GlobalAlignResult Survey::recover_by_global_alignment(const Cloud& placed,
-                                                      const Eigen::Isometry3d& place,
-                                                      const IncomingScan& in,
-                                                      const std::string& pose_failure,
-                                                      double* scanner_shift_m) const {
+GlobalAlignResult Survey::recover_by_global_alignment(
+    const Cloud& placed, const Eigen::Isometry3d& place, const IncomingScan& in,
+    const SurfaceFacing& facing, const std::string& pose_failure, double* scanner_shift_m) const {
   try {
-    GlobalAlignResult g =
-        global_align(placed, map_.merged_cloud(), params_.registration, params_.global_align);
+    GlobalAlignResult g = global_align(placed, map_.merged_cloud(), params_.registration,
+                                       params_.global_align, &facing);
     *scanner_shift_m = checked_scanner_shift(as_correction(g), place, in);
     return g;
   } catch (const RegistrationError& e) {
@@ -178,6 +182,16 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
       no_pose ? Eigen::Isometry3d::Identity() : planar_pose(in.x, in.y, in.yaw_deg);
   Cloud::Ptr guess(new Cloud);
   pcl::transformPointCloud(*pre.cloud, *guess, place.matrix().cast<float>());
+  // Which way the surfaces face: this scan's towards its scanner (placed by the guess),
+  // the map's from where its scans saw them.
+  SurfaceFacing facing;
+  if (!map_.empty()) {
+    facing.source_viewpoint = place * pre.transform.translation();
+    const SurveyMap* map = &map_;
+    facing.target_side = [map](const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
+      return map->seen_side(p, n);
+    };
+  }
 
   // Stage 2: ICP against the merged cloud of the previous scans, from the reported
   // pose or, without one, from the global alignment's guess.
@@ -187,8 +201,8 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
     ScanRecord::Registration reg;
     try {
       if (no_pose) {
-        GlobalAlignResult g =
-            global_align(*guess, map_.merged_cloud(), params_.registration, params_.global_align);
+        GlobalAlignResult g = global_align(*guess, map_.merged_cloud(), params_.registration,
+                                           params_.global_align, &facing);
         const Eigen::Vector3d c = g.guess * pre.transform.translation();
         reg.scanner_shift_m = (g.icp.correction * c - c).head<2>().norm();
         reg.icp = g.icp;
@@ -197,7 +211,7 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
         rec.placed_by = PlacedBy::kGlobalAndIcp;
       } else {
         try {
-          reg.icp = register_scan(*guess, map_.merged_cloud(), params_.registration);
+          reg.icp = register_scan(*guess, map_.merged_cloud(), params_.registration, &facing);
           reg.scanner_shift_m = checked_scanner_shift(reg.icp, place, in);
           correction = reg.icp.correction;
           rec.placed_by = PlacedBy::kPoseAndIcp;
@@ -205,8 +219,8 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
           // The reported pose may be off by more than ICP reaches (a long drive, a turn):
           // recover as a robot would, by a global alignment, kept only within what the
           // pose can be wrong by.
-          GlobalAlignResult g = recover_by_global_alignment(*guess, place, in, from_pose.what(),
-                                                            &reg.scanner_shift_m);
+          GlobalAlignResult g = recover_by_global_alignment(*guess, place, in, facing,
+                                                            from_pose.what(), &reg.scanner_shift_m);
           reg.icp = g.icp;
           correction = g.transform;
           reg.global = std::move(g);
@@ -287,24 +301,6 @@ double planar_distance(const Point3& a, const Point3& b) {
   return std::hypot(a.x - b.x, a.y - b.y);
 }
 }  // namespace
-
-std::optional<Point3> recovery_position(const ScanRecord& last, const Point3& failed,
-                                        double fraction, const std::vector<Point3>& tried) {
-  const Point3 from = last.scanner();
-  const double x = from.x + fraction * (failed.x - from.x);
-  const double y = from.y + fraction * (failed.y - from.y);
-  double nearest_tried = std::numeric_limits<double>::infinity();
-  for (const Point3& t : tried) nearest_tried = std::min(nearest_tried, planar_distance(t, from));
-  std::optional<Point3> best;
-  double best_d = 0;
-  for (const NbvCandidate& c : last.nbv.candidates) {
-    const Point3& p = c.position;
-    if (planar_distance(p, from) >= nearest_tried) continue;
-    const double d = planar_distance(p, Point3(x, y, 0));
-    if (!best || d < best_d) best = p, best_d = d;
-  }
-  return best;
-}
 
 NbvParams Survey::nbv_params() const {
   NbvParams nbv = params_.nbv;
@@ -394,7 +390,9 @@ void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& rob
   std::vector<NbvCandidate> all;
   std::vector<std::vector<NbvCandidate>> in_room(rec.rooms.size());
   for (std::size_t i = 0; i < positions.size(); ++i) {
-    const NbvCandidate c{positions[i], 0.0, path_m[i], std::nullopt};
+    NbvCandidate c;
+    c.position = positions[i];
+    c.path_m = path_m[i];
     all.push_back(c);
     if (const auto id = rooms.room_at(positions[i]))
       if (status_of[*id]) in_room[*status_of[*id]].push_back(c);
@@ -516,6 +514,7 @@ void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& rob
   for (const DoorwayPlan& plan : plans) {
     NbvParams beyond = nbv;
     beyond.room = beyond_door(openings[plan.door], plan.side, nbv.limits.max_range, top);
+    beyond.see_through_doors = true;
     NbvResult res = best_view_among(tree, {*plan.doorway}, beyond);
     if (!res.best || res.best->score <= 0) continue;
     const DetectedOpening& o = openings[plan.door];
@@ -534,6 +533,38 @@ double Survey::predicted_overlap_at(const Point3& position) const {
   return predict_overlap(map_.tree(), position, nbv_params()).share;
 }
 
+std::optional<Waypoint> Survey::waypoint_toward(const Point3& from, const Point3& to, double to_m,
+                                                double max_path_m,
+                                                const std::vector<Point3>& tried) const {
+  const NbvParams nbv = nbv_params();
+  std::vector<double> from_m, towards_m;
+  const std::vector<Point3> stands =
+      find_candidates(map_.tree(), params_.robot, from, map_.scanners(), nbv, nullptr, &from_m);
+  const std::vector<Point3> seen_from_to =
+      find_candidates(map_.tree(), params_.robot, to, map_.scanners(), nbv, nullptr, &towards_m);
+  // Both lists hold the same positions in grid order where both ends reach them.
+  std::map<std::pair<double, double>, double> path_to;
+  for (std::size_t i = 0; i < seen_from_to.size(); ++i)
+    path_to.emplace(std::make_pair(seen_from_to[i].x, seen_from_to[i].y), towards_m[i]);
+  const double r = map_.tree().leaf_size();
+  double nearest_tried = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < stands.size(); ++i)
+    for (const Point3& t : tried)
+      if (planar_distance(stands[i], t) < r) nearest_tried = std::min(nearest_tried, from_m[i]);
+  std::optional<Waypoint> best;
+  double best_to = to_m;
+  for (std::size_t i = 0; i < stands.size(); ++i) {
+    if (from_m[i] > max_path_m || from_m[i] >= nearest_tried) continue;
+    const auto t = path_to.find(std::make_pair(stands[i].x, stands[i].y));
+    if (t == path_to.end()) continue;
+    if (t->second < best_to || (best && t->second == best_to && from_m[i] < best->path_m)) {
+      best = Waypoint{stands[i], from_m[i]};
+      best_to = t->second;
+    }
+  }
+  return best;
+}
+
 std::optional<double> Survey::path_between(const Point3& from, const Point3& to) const {
   std::vector<double> path_m;
   const std::vector<Point3> positions = find_candidates(
@@ -549,6 +580,7 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
   std::optional<double> predicted;      // the overlap predicted there
   std::optional<double> path;           // the robot's path there
   std::vector<Point3> failed_in_a_row;  // where the scans since the last placed one failed
+  double failed_path_m = 0;             // the path from the last placed scan to the first
   for (std::size_t i = records_.size(); i < params_.max_scans;) {
     const IncomingScan in = platform.scan();
     observer_->scan_taken(i, in);
@@ -561,11 +593,17 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
       f.position = target.value_or(Point3());
       f.error = e.what();
       f.path_m = path;
-      if (target) failed_in_a_row.push_back(*target);
-      // Halfway back to the last placed scan, then a quarter of the way, ...
+      if (target) {
+        if (failed_in_a_row.empty()) failed_path_m = path.value_or(0.0);
+        failed_in_a_row.push_back(*target);
+      }
+      // Back along the path to the last placed scan: at most half of it, then a quarter...
+      std::optional<Waypoint> retry;
       if (target && !records_.empty() && failed_in_a_row.size() <= params_.max_recoveries)
-        f.retry = recovery_position(records_.back(), failed_in_a_row.front(),
-                                    std::ldexp(1.0, -int(failed_in_a_row.size())), failed_in_a_row);
+        retry = waypoint_toward(records_.back().scanner(), failed_in_a_row.front(), failed_path_m,
+                                std::ldexp(failed_path_m, -int(failed_in_a_row.size())),
+                                failed_in_a_row);
+      if (retry) f.retry = retry->position;
       out.registration_failures.push_back(f);
       if (!f.retry) {
         observer_->registration_failed(f);
@@ -573,6 +611,7 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
         out.error = e.what();
         return out;
       }
+      // The robot stands at the failed position: its way back there.
       path = path_between(*target, *f.retry);
       out.path_m += path.value_or(0.0);
       platform.move_to(*f.retry);

@@ -136,6 +136,20 @@ SemiOcTree& SurveyMap::tree() {
   return *tree_;
 }
 
+int SurveyMap::seen_side(const Eigen::Vector3d& point, const Eigen::Vector3d& normal) const {
+  if (!tree_) return 0;
+  const Eigen::Vector3d step = 1.5 * tree_->leaf_size() * normal.normalized();
+  auto seen_free = [&](const Eigen::Vector3d& p) {
+    const std::optional<Octant> o = tree_->find_octant(Point3(p.x(), p.y(), p.z()));
+    if (!o) return false;
+    const Label l = o->label();
+    return l == Label::kEmpty || l == Label::kScan || l == Label::kNbv || l == Label::kOut ||
+           l == Label::kDoor || l == Label::kWindow;
+  };
+  const bool ahead = seen_free(point + step), behind = seen_free(point - step);
+  return ahead == behind ? 0 : (ahead ? 1 : -1);
+}
+
 const Cloud& SurveyMap::merged_cloud() const {
   require_a_scan(empty());
   return *merged_;

@@ -3,7 +3,8 @@
 // occluded octants, blocked, through a door), the volume weights of method 1, the
 // level-ℓ reading of method 2, method 3's frontier faces, agreement with a
 // brute-force reference and with the same map stored as a homogeneous grid,
-// thread-count independence, Eq 5 by hand, and both counted inside a room.
+// thread-count independence, Eq 5 by hand, both counted inside a room, and the choice
+// weighed by the path (travel weight).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -59,6 +60,7 @@ struct LinesMap : Map {
 
 TEST(Nbv, ScoreEqualsHandComputedSum) {
   LinesMap m;
+  double m2_through_door = 0;
   NbvParams p;  // the scanner's default limits: 0.6–60 m, elevation −60°…90°
   // T1 1, T2 1/2, T3 1/3, T4 0 (occupied), T5 0 (door), T6 1 (through out),
   // T7 8 (level 3), T8 0 (below −60°), T9 0 (unknown).
@@ -67,6 +69,12 @@ TEST(Nbv, ScoreEqualsHandComputedSum) {
   // Looking straight down is allowed: T8 is seen directly.
   p.limits.elevation_min_deg = -90;
   EXPECT_NEAR(score_at(m.t, m.a, p), expected + 1, 1e-12);
+  // Seeing through doors (a doorway scan): T5 is seen behind the door leaf, directly.
+  p = NbvParams{};
+  p.see_through_doors = true;
+  EXPECT_NEAR(score_at(m.t, m.a, p), expected + 1, 1e-12);
+  p.method = 2;
+  m2_through_door = score_at(m.t, m.a, p);
   // Range limit 1 m: only T1 (0.7 m) and T7 (0.83 m) remain.
   p = NbvParams{};
   p.limits.max_range = 1.0;
@@ -84,6 +92,9 @@ TEST(Nbv, ScoreEqualsHandComputedSum) {
   NbvParams m2;
   m2.method = 2;
   EXPECT_NEAR(score_at(leafy.t, leafy.a, m2), 1 + 1.0 / 2 + 1.0 / 3 + 1, 1e-12);
+  // Method 2 sees T5 through the door as well; T7's 8 leaf cells count 4 direct and 4
+  // behind them (1/2 each).
+  EXPECT_NEAR(m2_through_door, 1 + 1.0 / 2 + 1.0 / 3 + 1 + (4 + 4.0 / 2) + 1, 1e-12);
 }
 
 TEST(Nbv, Method1WeightsAnOctantEightTimesItsChild) {
@@ -409,6 +420,67 @@ TEST(Nbv, RoomLimitsTheTargetsAndTheStopPercentage) {
   const NbvResult r = next_best_view(m.t, RobotGeometry{}, nbv, {}, p);
   ASSERT_TRUE(r.best);
   EXPECT_NEAR(r.stop_percent, stop_percentage(m.t, r.best->position, p.limits, 0, room), 1e-12);
+}
+
+// --- The travel weight ------------------------------------------------------------------
+
+// A 4.8 × 4.8 m room with two occluded targets of 64 leaves, one by the east wall and one
+// by the north wall. With a range of 2.5 m, a candidate at (3.6, 2.4) sees both and one
+// at (1.2, 2.4) the north one only; their paths are set by hand.
+struct TwoTargets : Map {
+  TwoTargets() : Map(6, 6, 3) {
+    walls(4.8, 4.8, 2.4);
+    set(4.4, 2.4, 1.0, 2, Label::kOccluded);
+    set(2.0, 4.0, 1.0, 2, Label::kOccluded);
+  }
+};
+
+NbvParams short_range() {
+  NbvParams p;
+  p.limits.min_range = 0.3;
+  p.limits.max_range = 2.5;
+  p.limits.elevation_min_deg = -60;
+  p.limits.elevation_max_deg = 60;
+  return p;
+}
+
+NbvCandidate at(double x, double y, double path_m) {
+  NbvCandidate c;
+  c.position = Point3(x, y, 1.2);
+  c.path_m = path_m;
+  return c;
+}
+
+TEST(Nbv, TheChoiceWeighsTheScoreByTheTravelWeight) {
+  TwoTargets room;
+  NbvParams p = short_range();
+  // Near the target (higher score) but far by path, and farther from it but near by path.
+  const std::vector<NbvCandidate> two = {at(3.6, 2.4, 10.0), at(1.2, 2.4, 1.0)};
+  const NbvResult plain = best_view_among(room.t, two, p);
+  ASSERT_TRUE(plain.best);
+  ASSERT_GT(plain.candidates[0].score, plain.candidates[1].score);
+  ASSERT_GT(plain.candidates[1].score, 0);
+  EXPECT_EQ(plain.best->position.x, 3.6);
+  EXPECT_EQ(plain.candidates[0].value, plain.candidates[0].score);  // unweighed
+  const double far_eq5 = plain.stop_percent;
+
+  p.travel_weight = 1.0;  // e^-10 against e^-1
+  const NbvResult weighed = best_view_among(room.t, two, p);
+  ASSERT_TRUE(weighed.best);
+  EXPECT_EQ(weighed.best->position.x, 1.2);
+  for (const NbvCandidate& c : weighed.candidates)
+    EXPECT_DOUBLE_EQ(c.value, c.score * std::exp(-c.path_m));
+  // The far candidate would still see more: it keeps the survey going.
+  EXPECT_DOUBLE_EQ(weighed.stop_percent, far_eq5);
+  EXPECT_GT(far_eq5, stop_percentage(room.t, weighed.best->position, p.limits));
+  // A small weight leaves the choice to the score.
+  p.travel_weight = 0.01;
+  const NbvResult light = best_view_among(room.t, two, p);
+  ASSERT_TRUE(light.best);
+  EXPECT_EQ(light.best->position.x, 3.6);
+  EXPECT_DOUBLE_EQ(light.stop_percent, far_eq5);
+  p.travel_weight = -1;
+  EXPECT_THROW(best_view_among(room.t, two, p), std::invalid_argument);
 }
 
 }  // namespace

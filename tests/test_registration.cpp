@@ -202,6 +202,71 @@ TEST(Registration, NoiseFailsNamingFitnessAndOverlap) {
   }
 }
 
+// A 4 × 3.88 m room B (x 0..4, y 0.12..4) north of a 0.12 m partition (y 0..0.12) that
+// runs on 4 m to either side, as a corridor's wall does. The map saw the partition's
+// south face (y = 0) from the south, and room B's other walls through a door; the new
+// scan sees the partition's north face (y = 0.12) all along. `north_face`: the scan's
+// walls, else the map's.
+Cloud::Ptr partitioned(bool north_face, double spacing, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  Cloud::Ptr c(new Cloud);
+  auto add = [&](double x, double y, double z) {
+    c->push_back(
+        pcl::PointXYZ{float(x + noise(rng)), float(y + noise(rng)), float(z + noise(rng))});
+  };
+  const double partition = north_face ? 0.12 : 0.0;
+  for (double z = 0.2; z <= 2.4; z += spacing) {
+    for (double x = -4.0; x <= 8.0; x += spacing) add(x, partition, z);
+    for (double x = 0.0; x <= 4.0; x += spacing) add(x, 4.0, z);  // the far wall
+    for (double y = 0.12; y <= 4.0; y += spacing) {
+      add(0.0, y, z);
+      add(4.0, y, z);
+    }
+  }
+  return c;
+}
+
+// The partition's faces: the south one seen from the south, every other wall from room B.
+int side_seen(const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
+  Eigen::Vector3d towards;  // from the surface to where it was seen from
+  if (std::abs(p.y()) < 0.06)
+    towards = {0, -1, 0};
+  else if (std::abs(p.y() - 4.0) < 0.06)
+    towards = {0, -1, 0};
+  else
+    towards = {p.x() < 2.0 ? 1.0 : -1.0, 0, 0};
+  const double d = n.dot(towards);
+  return d > 0.5 ? 1 : (d < -0.5 ? -1 : 0);
+}
+
+// Without the facing, the scan's side of the partition is laid onto the other side: a
+// shift by the wall's thickness that fits well. With it, the faces are told apart.
+TEST(Registration, TheTwoFacesOfAWallAreNotConfused) {
+  const Cloud::Ptr target = partitioned(false, 0.03, 1);
+  const Cloud::Ptr truth = partitioned(true, 0.037, 2);
+  const Eigen::Isometry3d error = planar_pose(0.0, 0.06, 0.0);  // half the wall's thickness
+  const Cloud::Ptr source = transformed(*truth, error);
+  SurfaceFacing facing;
+  facing.source_viewpoint = error * Eigen::Vector3d(2.0, 2.0, 1.5);
+  facing.target_side = side_seen;
+
+  const RegistrationResult blind = register_scan(*source, *target);
+  const RegistrationResult faced = register_scan(*source, *target, {}, &facing);
+  const double blind_error = (blind.correction * error).translation().norm();
+  const double faced_error = (faced.correction * error).translation().norm();
+  std::printf(
+      "partition: error %.1f mm without the facing (fitness %.3g m², overlap %.2f), "
+      "%.1f mm with it (fitness %.3g m², overlap %.2f)\n",
+      1e3 * blind_error, blind.fitness, blind.overlap, 1e3 * faced_error, faced.fitness,
+      faced.overlap);
+  EXPECT_GT(blind_error, 0.1);  // the thickness of the wall
+  EXPECT_LT(faced_error, 0.01);
+  // With the faces told apart, the partition (half the scan) pairs with nothing.
+  EXPECT_LT(faced.overlap, 0.6);
+  EXPECT_GT(faced.overlap, 0.4);
+}
+
 TEST(Registration, EmptyOrTinyCloudsFail) {
   const Cloud::Ptr target = room(0.05, 11);
   const Cloud empty;

@@ -68,7 +68,9 @@ struct WorstScorePolicy : NextScanPolicy {
     for (const NbvCandidate& c : scan.nbv.candidates)
       if (c.score < worst->score) worst = &c;
     chosen.push_back(worst->position);
-    return {worst->position, std::nullopt};
+    NextScanChoice choice;
+    choice.position = worst->position;
+    return choice;
   }
   const char* what() const override { return "worst candidate"; }
 };
@@ -249,13 +251,16 @@ TEST(SurveyStage, AFailedRegistrationIsRecoveredByAScanNearerTheLastPlacedOne) {
   EXPECT_EQ(platform.targets[0].x, f.position.x);  // the NBV it failed at
   EXPECT_EQ(platform.targets[1].x, f.retry->x);    // then the retry
   const ScanRecord& first = survey.records()[0];
-  EXPECT_TRUE(same_position(*f.retry, *recovery_position(first, f.position, 0.5, {f.position})));
-  // Nearer the first scan than the failed position, and a candidate of the first scan.
+  // A position the first scan's robot could stand at, at most half the path to the failed
+  // position from it, and nearer the first scan than the failed position.
+  ASSERT_TRUE(f.path_m);
+  const auto retry =
+      std::find_if(first.nbv.candidates.begin(), first.nbv.candidates.end(),
+                   [&](const NbvCandidate& c) { return same_position(c.position, *f.retry); });
+  ASSERT_NE(retry, first.nbv.candidates.end());
+  EXPECT_LE(retry->path_m, 0.5 * *f.path_m);
   EXPECT_LT(planar_distance(*f.retry, first.scanner()),
             planar_distance(f.position, first.scanner()));
-  EXPECT_TRUE(
-      std::any_of(first.nbv.candidates.begin(), first.nbv.candidates.end(),
-                  [&](const NbvCandidate& c) { return same_position(c.position, *f.retry); }));
   // The second record is the retry, placed where the robot stood.
   EXPECT_LT(planar_distance(survey.records()[1].scanner(), *f.retry), 0.05);
   EXPECT_LT(platform.truths()[1].pose_error_m, 0.05);
@@ -284,7 +289,11 @@ TEST(SurveyStage, RecoveriesComeNearerTheLastPlacedScanAndAreBounded) {
     EXPECT_LT(planar_distance(*f[i].retry, first), planar_distance(f[i].position, first)) << i;
   }
   if (f.size() < p.max_recoveries + 1) {  // ended early: nothing nearer was left
-    EXPECT_FALSE(recovery_position(survey.records()[0], f[0].position, 0.125, {f.back().position}));
+    std::vector<Point3> tried;
+    for (const RegistrationFailure& x : f) tried.push_back(x.position);
+    ASSERT_TRUE(f[0].path_m);
+    EXPECT_FALSE(survey.waypoint_toward(first, f[0].position, *f[0].path_m,
+                                        std::ldexp(*f[0].path_m, -int(f.size())), tried));
   }
 }
 
@@ -507,7 +516,7 @@ TEST(SurveyStage, ScopesAndRoomStatesHaveNames) {
 TEST(SurveyStage, RandomPolicyDrawsAmongTheCandidatesReproducibly) {
   ScanRecord r;
   for (int i = 0; i < 7; ++i)
-    r.nbv.candidates.push_back({Point3(i, 2 * i, 1.5), double(i), 0.0, std::nullopt});
+    r.nbv.candidates.push_back({Point3(i, 2 * i, 1.5), double(i), 0.0, double(i), std::nullopt});
   const SurveyMap map{SurveyMapParams{}};
   RandomCandidatePolicy a(5), b(5), c(6);
   bool differs = false;

@@ -69,9 +69,11 @@ struct GlobalAlignResult {
 // too few points on vertical surfaces, when no placement passes the bounds, or when a
 // placement distinct from the chosen one also passes them with at least
 // ambiguity_ratio of its overlap (ambiguous, e.g. a symmetric empty room);
-// std::invalid_argument for inconsistent parameters.
+// std::invalid_argument for inconsistent parameters. `facing` (may be null; its
+// viewpoint in `source`'s frame): register_scan pairs surfaces facing the same way.
 GlobalAlignResult global_align(const Cloud& source, const Cloud& target,
                                const RegistrationParams& registration = {},
-                               const GlobalAlignParams& params = {});
+                               const GlobalAlignParams& params = {},
+                               const SurfaceFacing* facing = nullptr);
 
 }  // namespace semioctree

@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 #include <cstddef>
+#include <functional>
 #include <stdexcept>
 
 #include "semioctree/scan_io.h"
@@ -57,13 +58,26 @@ class RegistrationError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Which way the surfaces of both clouds face (docs/registration.md, "The two faces of
+// a wall"). With it, a source point pairs only with target points on a surface facing
+// the same way, so that the side of a wall a new scan sees first is not laid onto the
+// other side, mapped from the next room (a shift by the wall's thickness that fits well).
+struct SurfaceFacing {
+  // The source scan's optical centre, placed as the source is: its surfaces face it.
+  Eigen::Vector3d source_viewpoint = Eigen::Vector3d::Zero();
+  // The side from which the target's surface at `point` (normal `normal`, either sign)
+  // was seen: +1 along the normal, -1 against it, 0 unknown (both sides, or neither).
+  std::function<int(const Eigen::Vector3d& point, const Eigen::Vector3d& normal)> target_side;
+};
+
 // `source` is already placed by the initial guess (odometry) in the target's
-// frame. Throws RegistrationError (the message gives fitness, overlap and the
-// bounds) when the result fails the bounds, when ICP finds no correspondences,
-// or when either cloud is empty or too small; std::invalid_argument for
-// inconsistent parameters.
+// frame. `facing` (may be null): pair only surfaces that face the same way. Throws
+// RegistrationError (the message gives fitness, overlap and the bounds) when the
+// result fails the bounds, when ICP finds no correspondences, or when either cloud
+// is empty or too small; std::invalid_argument for inconsistent parameters.
 RegistrationResult register_scan(const Cloud& source, const Cloud& target,
-                                 const RegistrationParams& params = {});
+                                 const RegistrationParams& params = {},
+                                 const SurfaceFacing* facing = nullptr);
 
 // Placement of a levelled scan by a planar pose: rotation `yaw_deg` about z,
 // then translation (x, y, 0).

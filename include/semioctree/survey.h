@@ -55,7 +55,7 @@ struct SurveyParams {
   // docs/nbv.md). None: the share registration itself needs, registration.min_overlap.
   std::optional<double> min_overlap;
   // Survey::run: failed registrations in a row recovered from by a scan nearer the last
-  // placed one (recovery_position); 0: the first failure ends the survey.
+  // placed one (Survey::waypoint_toward); 0: the first failure ends the survey.
   std::size_t max_recoveries = 3;
 };
 
@@ -249,14 +249,11 @@ struct SurveyOutcome {
   double path_m = 0;  // the robot's path over the survey (to failed scans and retries too)
 };
 
-// Where to scan again after a scan at `failed` could not be registered: of the
-// candidates of `last` (the last placed scan), the one nearest the point `fraction` of
-// the way from its scanner to `failed` (nearer the map the scans agree on, so more of
-// the new scan overlaps it) among those nearer its scanner than every position in
-// `tried` (the failed ones), so that each retry comes nearer. None without such a
-// candidate.
-std::optional<Point3> recovery_position(const ScanRecord& last, const Point3& failed,
-                                        double fraction, const std::vector<Point3>& tried);
+// A stop on the robot's way (Survey::waypoint_toward).
+struct Waypoint {
+  Point3 position;    // a position the robot can stand at (scanner height)
+  double path_m = 0;  // the robot's path to it
+};
 
 class Survey {
  public:
@@ -274,10 +271,21 @@ class Survey {
   // The loop: scans from `platform` until the stop percentage (kFloor: in every room
   // the robot can reach), no candidate, the scan budget or the path budget ends it; moves to
   // `policy`'s choice in between. A scan that cannot be registered is dropped
-  // (ScanPlatform::rejected) and taken again at recovery_position, halfway back to the last placed
-  // scan, then a quarter, ... up to SurveyParams::max_recoveries times in a row; then the survey
-  // ends (kRegistrationFailed with the error). It does not throw for a failed registration.
+  // (ScanPlatform::rejected) and taken again at the waypoint_toward it from the last placed
+  // scan at most half the path there, then a quarter, ... up to SurveyParams::max_recoveries
+  // times in a row; then the survey ends (kRegistrationFailed with the error). It does not
+  // throw for a failed registration.
   SurveyOutcome run(ScanPlatform& platform, NextScanPolicy& policy);
+
+  // A stop on the robot's way from `from` towards `to`, `to_m` away by path: of the
+  // positions it can stand at (find_candidates from `from`, as the NBV finds them), those
+  // at most `max_path_m` from `from` by path, and nearer it than every position of `tried`
+  // that is one of them, the one nearest `to` by path (ties: nearer `from`), if it is
+  // nearer `to` than `to_m`. Survey::run sends the robot back there after a failed
+  // registration.
+  std::optional<Waypoint> waypoint_toward(const Point3& from, const Point3& to, double to_m,
+                                          double max_path_m,
+                                          const std::vector<Point3>& tried = {}) const;
 
   const SurveyMap& map() const { return map_; }
   const std::vector<ScanRecord>& records() const { return records_; }
@@ -288,7 +296,7 @@ class Survey {
   // cloud, kept only within the pose's bounds (the scanner's shift goes to
   // `scanner_shift_m`); else RegistrationError with both reasons.
   GlobalAlignResult recover_by_global_alignment(const Cloud& placed, const Eigen::Isometry3d& place,
-                                                const IncomingScan& in,
+                                                const IncomingScan& in, const SurfaceFacing& facing,
                                                 const std::string& pose_failure,
                                                 double* scanner_shift_m) const;
 

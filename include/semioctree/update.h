@@ -13,6 +13,7 @@
 // grid is fixed to the world, the voxels of every scan coincide.
 #pragma once
 
+#include <Eigen/Core>
 #include <memory>
 #include <vector>
 
@@ -84,6 +85,11 @@ class SurveyMap {
   const std::vector<DetectedOpening>& openings() const { return openings_; }
   double ceiling_height() const { return ceiling_; }
   std::vector<ScannerView> views() const;
+  // The side from which the scans saw the surface at `point` with normal `normal` (either
+  // sign; survey frame): +1 along the normal, -1 against it, 0 when the map holds space
+  // seen free (or seen through an opening) a leaf and a half away on both sides or on
+  // neither (SurfaceFacing::target_side). 0 before the first scan.
+  int seen_side(const Eigen::Vector3d& point, const Eigen::Vector3d& normal) const;
   const SurveyMapParams& params() const { return params_; }
 
  private:

@@ -58,6 +58,11 @@ void add_planning_options(CLI::App& cmd, PlanningOptions& o) {
                  "1.5 degrees through the map); default: the share registration needs (0.25); 0: "
                  "no prediction limit")
       ->check(finite_in(0, 1));
+  cmd.add_option("--travel-weight", o.travel_weight,
+                 "λ, 1/m: a candidate's score is weighed by exp(-λ × its path from the robot), "
+                 "for surveys where driving costs time; 0: the best score wherever it is")
+      ->check(finite_in(0, 100))
+      ->capture_default_str();
   cmd.add_option("--threads", o.threads, "worker threads (0: one per core; at most 256)")
       ->check(thread_count())
       ->capture_default_str();
@@ -89,6 +94,7 @@ void apply_planning_options(const PlanningOptions& o, SurveyParams& p, bool homo
   p.stop_percent = o.stop;
   p.scope = survey_scope_from_string(o.scope);
   if (o.min_overlap >= 0) p.min_overlap = o.min_overlap;
+  p.nbv.travel_weight = o.travel_weight;
 }
 
 }  // namespace semioctree::cli

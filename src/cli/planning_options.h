@@ -21,6 +21,7 @@ struct PlanningOptions {
   std::string scope = "floor";  // SurveyScope: room, floor or map
   double ceiling = 0;           // > 0: the room's height above the floor (--ceiling)
   double min_overlap = -1;      // < 0: registration's own bound (SurveyParams::min_overlap)
+  double travel_weight = 0;     // 1/m (NbvParams::travel_weight)
 };
 void add_planning_options(CLI::App& cmd, PlanningOptions& o);
 

@@ -253,7 +253,10 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
   r["candidates_low_overlap"] = s.nbv.low_overlap;
   r["predicted_overlap"] = s.predicted_overlap ? json(*s.predicted_overlap) : json(nullptr);
   r["path_m"] = s.path_m ? json(*s.path_m) : json(nullptr);
-  if (best) r["nbv"]["path_m"] = best->path_m;
+  if (best) {
+    r["nbv"]["path_m"] = best->path_m;
+    r["nbv"]["value"] = best->value;
+  }
   r["occluded_targets"] = s.nbv.scoring.targets;
   r["scope"] = to_string(s.scope);
   if (s.scope == SurveyScope::kFloor) {
@@ -354,6 +357,7 @@ void SurveyOutput::write_survey_json(const std::string& stopped_because, const j
             {"coarse", params_.map.grid.coarse},
             {"stop_threshold_percent", params_.stop_percent},
             {"method", params_.nbv.method},
+            {"travel_weight", params_.nbv.travel_weight},
             {"platform",
              {{"robot_radius", params_.robot.radius},
               {"scanner_height", params_.robot.scanner_height},

@@ -10,9 +10,11 @@ inline bool free_space(Label l) {
   return l == Label::kEmpty || l == Label::kScan || l == Label::kNbv;
 }
 
-// An octant a line of sight cannot pass: occupied, unknown, door or window.
-inline bool blocks(Label l) {
-  return l == Label::kOccupied || l == Label::kUnknown || l == Label::kDoor || l == Label::kWindow;
+// An octant a line of sight cannot pass: occupied, unknown, door or window (a door
+// passes with `doors_pass`: a doorway scan looks through it).
+inline bool blocks(Label l, bool doors_pass = false) {
+  return l == Label::kOccupied || l == Label::kUnknown || (l == Label::kDoor && !doors_pass) ||
+         l == Label::kWindow;
 }
 
 }  // namespace semioctree::nbv_detail

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <stdexcept>
 #include <vector>
 
 #include "../parallel_for.h"
@@ -66,8 +67,9 @@ std::vector<double> score_targets(const SemiOcTree& tree, const std::vector<Targ
             ++st.blocked_by_cache;
             continue;
           }
-          const Los los = params.method == 2 ? los_cells(tree, level, a, t, &cache)
-                                             : los_octants(tree, a, t.center, &cache);
+          const Los los = params.method == 2
+                              ? los_cells(tree, level, a, t, &cache, params.see_through_doors)
+                              : los_octants(tree, a, t.center, &cache, params.see_through_doors);
           if (los.blocker) {  // keep the last two
             memo[2 * i + 1].store(memo[2 * i].load(std::memory_order_relaxed),
                                   std::memory_order_relaxed);
@@ -142,8 +144,11 @@ NbvResult next_best_view(const SemiOcTree& tree, const RobotGeometry& robot,
       find_candidates(tree, robot, robot_position, past_scans, params, &report, &path_m);
   std::vector<NbvCandidate> candidates;
   candidates.reserve(positions.size());
-  for (std::size_t i = 0; i < positions.size(); ++i)
-    candidates.push_back({positions[i], 0.0, path_m[i], std::nullopt});
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    NbvCandidate& c = candidates.emplace_back();
+    c.position = positions[i];
+    c.path_m = path_m[i];
+  }
   const double seconds_candidates = seconds_since(t0);
   NbvResult res = best_view_among(tree, std::move(candidates), params);
   res.candidate_report = report;
@@ -153,6 +158,8 @@ NbvResult next_best_view(const SemiOcTree& tree, const RobotGeometry& robot,
 
 NbvResult best_view_among(const SemiOcTree& tree, std::vector<NbvCandidate> candidates,
                           const NbvParams& params) {
+  if (!(params.travel_weight >= 0))
+    throw std::invalid_argument("NbvParams::travel_weight must be >= 0");
   NbvResult res;
   auto t0 = Clock::now();
   std::vector<Point3> positions;
@@ -162,19 +169,22 @@ NbvResult best_view_among(const SemiOcTree& tree, std::vector<NbvCandidate> cand
   const std::vector<double> scores = score_targets(tree, targets, positions, params, &res.scoring);
   res.candidates = std::move(candidates);
   for (std::size_t i = 0; i < positions.size(); ++i) {
-    res.candidates[i].score = scores[i];
-    res.candidates[i].predicted_overlap.reset();
+    NbvCandidate& c = res.candidates[i];
+    c.score = scores[i];
+    c.value =
+        params.travel_weight > 0 ? c.score * std::exp(-params.travel_weight * c.path_m) : c.score;
+    c.predicted_overlap.reset();
   }
   res.seconds_scoring = seconds_since(t0);
   t0 = Clock::now();
-  // Best score first (grid order on ties); with a prediction, the first whose scan is
+  // Best value first (grid order on ties); with a prediction, the first whose scan is
   // predicted to overlap the map enough. A candidate that sees nothing (score 0) is not
   // tried: as the best it only says that the survey is done (Eq 5 is 0 there), and when
   // every candidate that sees something is passed over, there is no safe NBV.
   std::vector<std::size_t> order(res.candidates.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return res.candidates[a].score > res.candidates[b].score;
+    return res.candidates[a].value > res.candidates[b].value;
   });
   for (std::size_t i : order) {
     NbvCandidate& c = res.candidates[i];
@@ -193,9 +203,22 @@ NbvResult best_view_among(const SemiOcTree& tree, std::vector<NbvCandidate> cand
   }
   res.seconds_overlap = seconds_since(t0);
   t0 = Clock::now();
-  if (res.best)
+  if (res.best) {
     res.stop_percent =
         stop_percentage(tree, res.best->position, params.limits, params.threads, params.room);
+    // Weighed by the path, the NBV may see less than the highest-scoring candidate: what
+    // that one would still see keeps the survey going (a far view of much hidden space),
+    // unless it was passed over for its overlap.
+    const NbvCandidate& top = *std::max_element(
+        res.candidates.begin(), res.candidates.end(),
+        [](const NbvCandidate& a, const NbvCandidate& b) { return a.score < b.score; });
+    const bool weighed = params.travel_weight > 0;
+    const bool passed_over = top.predicted_overlap && *top.predicted_overlap < params.min_overlap;
+    if (weighed && top.score > res.best->score && !passed_over)
+      res.stop_percent =
+          std::max(res.stop_percent,
+                   stop_percentage(tree, top.position, params.limits, params.threads, params.room));
+  }
   res.seconds_stop = seconds_since(t0);
   return res;
 }

@@ -6,7 +6,8 @@
 
 namespace semioctree::nbv_detail {
 
-Los los_octants(const SemiOcTree& tree, const Point3& a, const Point3& b, BlockerCache* cache) {
+Los los_octants(const SemiOcTree& tree, const Point3& a, const Point3& b, BlockerCache* cache,
+                bool doors_pass) {
   Los r;
   bool blocked = false, first = true, last_occluded = false;
   std::uint32_t occluded = 0;  // not counting the start octant
@@ -17,7 +18,7 @@ Los los_octants(const SemiOcTree& tree, const Point3& a, const Point3& b, Blocke
       last_occluded = false;
       return true;
     }
-    if (blocks(l)) {
+    if (blocks(l, doors_pass)) {
       blocked = true;
       r.blocker = BlockerCache::pack(s);
       if (cache) cache->add(s);
@@ -136,7 +137,7 @@ class CellCounter {
 }  // namespace
 
 Los los_cells(const SemiOcTree& tree, unsigned level, const Point3& a, const Target& t,
-              BlockerCache* cache) {
+              BlockerCache* cache, bool doors_pass) {
   Los r;
   const CellCounter cc(tree, level, a, t.center);
   bool blocked = false;
@@ -171,7 +172,7 @@ Los los_cells(const SemiOcTree& tree, unsigned level, const Point3& a, const Tar
     n += std::max<std::int64_t>(0, cells);
   };
   const TraversalEnd end = tree.traverse(a, t.center, [&](const RayStep& s) {
-    if (index > 0 && blocks(s.label())) {  // the scanner's own octant never blocks
+    if (index > 0 && blocks(s.label(), doors_pass)) {  // the scanner's own octant never blocks
       blocked = true;
       r.blocker = BlockerCache::pack(s);
       if (cache) cache->add(s);

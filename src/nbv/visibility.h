@@ -136,18 +136,18 @@ class BlockerCache {
 };
 
 // Method 1 (and 3): the line a → b through the tree's octants. Blocked by an
-// occupied, unknown, door or window octant other than the scanner's own (the
-// blocker is then packed in `blocker` and added to `cache`, if given); not
-// visible either when an end lies outside the key range. Otherwise visible, with
-// n = occluded octants crossed, not counting the scanner's octant nor the
-// target's (the last one visited).
+// occupied, unknown, door (unless `doors_pass`) or window octant other than the
+// scanner's own (the blocker is then packed in `blocker` and added to `cache`, if
+// given); not visible either when an end lies outside the key range. Otherwise
+// visible, with n = occluded octants crossed, not counting the scanner's octant nor
+// the target's (the last one visited).
 Los los_octants(const SemiOcTree& tree, const Point3& a, const Point3& b,
-                BlockerCache* cache = nullptr);
+                BlockerCache* cache = nullptr, bool doors_pass = false);
 
 // Method 2 (level ℓ = `level`): the line a → t.center, blocked as los_octants,
 // with n = the level-ℓ cells crossed that hold occluded space on the line, not
 // counting the scanner's level-ℓ cell nor the target's (t.cell).
 Los los_cells(const SemiOcTree& tree, unsigned level, const Point3& a, const Target& t,
-              BlockerCache* cache = nullptr);
+              BlockerCache* cache = nullptr, bool doors_pass = false);
 
 }  // namespace semioctree::nbv_detail

@@ -39,6 +39,10 @@ struct NbvParams {
   // Candidates may also stand on space seen only through an opening (out): the rooms
   // beyond the doors of a floor survey. false: only on space seen directly.
   bool stand_beyond_openings = false;
+  // Lines of sight pass door octants (the scoring's; Eq 5 keeps the paper's rule): a
+  // doorway scan looks through the door into the room beyond. false: doors block, as
+  // the room's boundary.
+  bool see_through_doors = false;
   // Scanner positions in door openings (x, y: the door's centre), tried after the grid
   // points as they are, on door octants too: a scan from a doorway sees both rooms (the
   // floor survey's linking scan into a room not seen yet).
@@ -51,6 +55,9 @@ struct NbvParams {
   std::optional<double> overlap_top;
   double min_overlap = 0;  // share, 0-1
   double overlap_ray_step_deg = 1.5;
+  // The score against the robot's path (docs/nbv.md, "Travel"): candidates are ranked by
+  // score · exp(−travel_weight · path) (NbvCandidate::value); 0 (1/m): by the score.
+  double travel_weight = 0;
   // Called after each candidate is scored with (candidates scored, candidates),
   // from the scoring threads: it must be thread-safe. Empty: no calls.
   std::function<void(std::size_t, std::size_t)> progress;

@@ -22,6 +22,9 @@ struct NbvCandidate {
   // one method only.
   double score = 0;
   double path_m = 0;  // the robot's shortest path there (find_candidates), m
+  // The score weighed by the path (NbvParams::travel_weight): what candidates are ranked
+  // by; the score itself with a weight of 0.
+  double value = 0;
   // Predicted overlap (NbvParams::overlap_top): set on the candidates tried, best first.
   std::optional<double> predicted_overlap;
 };
@@ -35,9 +38,10 @@ struct ScoringStats {
 };
 
 struct NbvResult {
-  // Highest score (first in grid order on ties) among the candidates whose predicted
+  // Highest value (first in grid order on ties) among the candidates whose predicted
   // overlap is not below NbvParams::min_overlap (all, without a prediction). Candidates
   // of score 0 are not predicted; none is best once a better one was passed over.
+  // With NbvParams::travel_weight 0, the value is the score (paper Eq 3).
   std::optional<NbvCandidate> best;
   std::vector<NbvCandidate> candidates;  // all feasible candidates, scored, in grid order
   CandidateReport candidate_report;
@@ -45,7 +49,10 @@ struct NbvResult {
   // The best one's (NbvParams::overlap_top; none for a best of score 0).
   std::optional<OverlapPrediction> best_overlap;
   std::size_t low_overlap = 0;  // candidates passed over for their predicted overlap
-  double stop_percent = 0;      // from the best candidate; 0 when there is none
+  // From the best candidate; 0 when there is none. Weighed by the path (travel_weight),
+  // from the highest-scoring candidate not passed over instead if that is larger: a far
+  // view of much hidden space keeps the survey going.
+  double stop_percent = 0;
   double seconds_candidates = 0, seconds_scoring = 0, seconds_overlap = 0,
          seconds_stop = 0;  // wall time
 };
@@ -57,7 +64,7 @@ std::vector<double> score_positions(const SemiOcTree& tree, const std::vector<Po
                                     const NbvParams& params, ScoringStats* stats = nullptr);
 
 // Candidates (find_candidates), their scores, the best candidate and its stop
-// percentage. Throws std::invalid_argument as find_candidates and score_positions do.
+// percentage. Throws std::invalid_argument as find_candidates and best_view_among do.
 NbvResult next_best_view(const SemiOcTree& tree, const RobotGeometry& robot,
                          const Point3& robot_position, const std::vector<Point3>& past_scans,
                          const NbvParams& params = {});
@@ -65,7 +72,7 @@ NbvResult next_best_view(const SemiOcTree& tree, const RobotGeometry& robot,
 // The NBV step after the candidates: scores `candidates` (positions and paths as
 // find_candidates gives them; scores and predictions are set here), the best one under
 // the overlap rule and its stop percentage. candidate_report and seconds_candidates are
-// left empty. Throws as score_positions.
+// left empty. Throws as score_positions, and std::invalid_argument for a travel_weight < 0.
 NbvResult best_view_among(const SemiOcTree& tree, std::vector<NbvCandidate> candidates,
                           const NbvParams& params = {});
 
