@@ -297,6 +297,35 @@ TEST(SurveyStage, RecoveriesComeNearerTheLastPlacedScanAndAreBounded) {
   }
 }
 
+// A placement that shares less than half the overlap predicted where the scan was taken
+// has slid: the global alignment is tried, and if that is no better the scan fails and
+// the map is kept. With a prediction a correct placement meets, it is placed.
+TEST(SurveyStage, APlacementSharingLessThanHalfThePredictedOverlapFails) {
+  const sim::Scene scene = test_scene();
+  SimulatedPlatform platform(scene, 1, 0);
+  Survey survey(params_for(scene, 4, 0.0), nullptr);
+  const ScanRecord& first = survey.add_scan(platform.scan());
+  platform.placed(first.scanner_to_survey);
+  ASSERT_TRUE(first.nbv.best);
+  platform.move_to(first.nbv.best->position);
+  const IncomingScan in = platform.scan();
+  // No placement can share 1.25 of the scan: twice that is asked.
+  try {
+    survey.add_scan(in, std::nullopt, 2.5);
+    FAIL() << "placed although it shares less than half the prediction";
+  } catch (const RegistrationError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("less than half"), std::string::npos) << m;
+    EXPECT_NE(m.find("nor by a global alignment"), std::string::npos) << m;
+  }
+  EXPECT_EQ(survey.records().size(), 1u);
+  EXPECT_EQ(survey.map().scanners().size(), 1u);
+  const ScanRecord& second = survey.add_scan(in, std::nullopt, 0.5);
+  ASSERT_TRUE(second.registration);
+  EXPECT_GE(second.registration->icp.overlap, 0.25);
+  EXPECT_EQ(second.placed_by, PlacedBy::kPoseAndIcp);
+}
+
 // Walls 0.2 m thick around the rectangle x ∈ [0, x1], y ∈ [0, y1] (their inner faces on
 // its sides), `height` high.
 nlohmann::json walls_around(double x1, double y1, double height) {

@@ -261,12 +261,17 @@ class Survey {
   explicit Survey(const SurveyParams& params, SurveyObserver* observer = nullptr);
 
   // One scan through preprocess → register → update → NBV, reporting each stage.
-  // `robot_position`: where the robot stands (default: under the scanner). Throws
-  // RegistrationError (the map is left as it was) when ICP or the global alignment fails
-  // (no placement, or an ambiguous one) or a scan finds another floor, PreprocessError
-  // when the scan cannot be levelled.
+  // `robot_position`: where the robot stands (default: under the scanner).
+  // `predicted_overlap`: the overlap predicted for where the scan was taken
+  // (predict_overlap); a placement sharing less than half of it with the map has slid to
+  // a wrong fit (docs/registration.md, "A placement that slid"): from the reported pose
+  // the global alignment is tried instead, and if that one is no better the scan fails.
+  // Throws RegistrationError (the map is left as it was) when ICP or the global alignment
+  // fails (no placement, or an ambiguous one) or a scan finds another floor,
+  // PreprocessError when the scan cannot be levelled.
   const ScanRecord& add_scan(const IncomingScan& scan,
-                             const std::optional<Point3>& robot_position = std::nullopt);
+                             const std::optional<Point3>& robot_position = std::nullopt,
+                             std::optional<double> predicted_overlap = std::nullopt);
 
   // The loop: scans from `platform` until the stop percentage (kFloor: in every room
   // the robot can reach), no candidate, the scan budget or the path budget ends it; moves to
