@@ -379,9 +379,10 @@ void add_survey_command(CLI::App& app) {
       ->check(finite_in(0, 1e6))
       ->capture_default_str();
   cmd->add_option("--max-recoveries", o->max_recoveries,
-                  "a scan that cannot be registered is dropped and taken again nearer the last "
-                  "placed scan (halfway back, then a quarter, ...): at most this many times in "
-                  "a row before the survey ends; 0: the first failure ends it")
+                  "a scan that cannot be registered is dropped and taken again back along the "
+                  "robot's path towards the last placed scan (at most half the path, then a "
+                  "quarter, ...): at most this many times in a row before the survey ends; 0: "
+                  "the first failure ends it")
       ->check(whole_in(0, 100))
       ->capture_default_str();
   cmd->add_flag("--homogeneous", o->homogeneous,
