@@ -301,6 +301,10 @@ TEST(SurveyStage, RecoveriesComeNearerTheLastPlacedScanAndAreBounded) {
 // has slid: the global alignment is tried, and if that is no better the scan fails and
 // the map is kept. With a prediction a correct placement meets, it is placed.
 TEST(SurveyStage, APlacementSharingLessThanHalfThePredictedOverlapFails) {
+  if (testing::sanitized())
+    GTEST_SKIP() << "skipped when sanitized: a global alignment and three ICP runs; "
+                    "AFailedRegistrationIsRecoveredByAScanNearerTheLastPlacedOne takes the "
+                    "path through the global alignment after a refused ICP";
   const sim::Scene scene = test_scene();
   SimulatedPlatform platform(scene, 1, 0);
   Survey survey(params_for(scene, 4, 0.0), nullptr);
