@@ -200,9 +200,10 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
   pcl::transformPointCloud(*pre.cloud, *guess, place.matrix().cast<float>());
   // Which way the surfaces face: this scan's towards its scanner (placed by the guess),
   // the map's from where its scans saw them.
+  const Eigen::Vector3d scanner_guess = place * pre.transform.translation();
   SurfaceFacing facing;
   if (!map_.empty()) {
-    facing.source_viewpoint = place * pre.transform.translation();
+    facing.source_viewpoint = scanner_guess;
     const SurveyMap* map = &map_;
     facing.target_side = [map](const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
       return map->seen_side(p, n);
@@ -258,7 +259,6 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
           } catch (const RegistrationError& e) {
             slid = e.what();
           }
-          const Eigen::Vector3d scanner_guess = place * pre.transform.translation();
           if (!slid.empty() && doubted &&
               same_placement(g.transform, doubted->correction, scanner_guess,
                              params_.registration.final_correspondence)) {

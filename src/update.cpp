@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <unordered_set>
 
+#include "nbv/label_roles.h"
 #include "semioctree/preprocess.h"
 #include "semioctree/timing.h"
 
@@ -141,10 +142,7 @@ int SurveyMap::seen_side(const Eigen::Vector3d& point, const Eigen::Vector3d& no
   const Eigen::Vector3d step = 1.5 * tree_->leaf_size() * normal.normalized();
   auto seen_free = [&](const Eigen::Vector3d& p) {
     const std::optional<Octant> o = tree_->find_octant(Point3(p.x(), p.y(), p.z()));
-    if (!o) return false;
-    const Label l = o->label();
-    return l == Label::kEmpty || l == Label::kScan || l == Label::kNbv || l == Label::kOut ||
-           l == Label::kDoor || l == Label::kWindow;
+    return o && nbv_detail::passable(o->label());
   };
   const bool ahead = seen_free(point + step), behind = seen_free(point - step);
   return ahead == behind ? 0 : (ahead ? 1 : -1);

@@ -20,11 +20,6 @@ struct RayResult {
   double range = 0;  // m, where it returned (unmapped: where it entered unseen space)
 };
 
-// Space a ray passes: seen free, or an opening it looks through.
-bool passable(Label l) {
-  return nbv_detail::free_space(l) || l == Label::kOut || l == Label::kDoor || l == Label::kWindow;
-}
-
 // The segment from `a` along unit direction `d`, up to `max_range` or until it leaves
 // the band floor_z < z < top_z; false when it leaves the band at once.
 bool clipped_end(const Point3& a, const Eigen::Vector3d& d, double max_range, double floor_z,
@@ -57,7 +52,7 @@ RayResult cast(const SemiOcTree& tree, const Point3& a, const Eigen::Vector3d& d
       if (range >= limits.min_range) r = {RayEnd::kMapped, range};
       return false;
     }
-    if (passable(l))
+    if (nbv_detail::passable(l))
       unseen_from = -1;  // unseen space the ray came out of was air on its line
     else if (unseen_from < 0)
       unseen_from = range;
