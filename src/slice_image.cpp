@@ -16,6 +16,7 @@ Rgb darker(Rgb c, double f) {
 }
 
 constexpr Rgb kBlack{0, 0, 0}, kWhite{255, 255, 255}, kNotMapped{235, 235, 235};
+constexpr Rgb kRoomOutline{200, 90, 0};
 
 std::string metres(double v) {
   char t[32];
@@ -24,6 +25,10 @@ std::string metres(double v) {
 }
 
 }  // namespace
+
+Rgb slice_room_color() {
+  return kRoomOutline;
+}
 
 void write_slice_png(const SemiOcTree& tree, const std::string& path, const SliceOptions& opt) {
   if (tree.coarse_count() == 0) throw std::invalid_argument("slice of an empty map");
@@ -77,9 +82,16 @@ void write_slice_png(const SemiOcTree& tree, const std::string& path, const Slic
   // Scans (black discs, numbered as scan_NN) joined in their order, and the NBV (red).
   // Discs of a size that reads at any scale (a leaf may be 1 or 30 pixels).
   const double rad = std::clamp(ppl * 2.0, 5.0, 9.0);
-  for (std::size_t i = 0; i + 1 < opt.scans.size(); ++i)
-    img.line(px(opt.scans[i].x), py(opt.scans[i].y), px(opt.scans[i + 1].x), py(opt.scans[i + 1].y),
-             kBlack, 1.5);
+  for (const SliceRoom& room : opt.rooms)
+    for (const std::array<float, 4>& e : room.outline)
+      img.line(px(e[0]), py(e[1]), px(e[2]), py(e[3]), kRoomOutline, 2.5);
+  if (opt.routes.empty())
+    for (std::size_t i = 0; i + 1 < opt.scans.size(); ++i)
+      img.line(px(opt.scans[i].x), py(opt.scans[i].y), px(opt.scans[i + 1].x),
+               py(opt.scans[i + 1].y), kBlack, 1.5);
+  for (const std::vector<Point3>& route : opt.routes)
+    for (std::size_t i = 0; i + 1 < route.size(); ++i)
+      img.line(px(route[i].x), py(route[i].y), px(route[i + 1].x), py(route[i + 1].y), kBlack, 1.5);
   if (opt.nbv && !opt.scans.empty()) {
     img.set_dashed(true);
     img.line(px(opt.scans.back().x), py(opt.scans.back().y), px(opt.nbv->x), py(opt.nbv->y),
@@ -105,6 +117,8 @@ void write_slice_png(const SemiOcTree& tree, const std::string& path, const Slic
   for (std::size_t i = 0; i < opt.scans.size(); ++i)
     tag(opt.scans[i], std::to_string(i), label_color(Label::kScan));
   if (opt.nbv) tag(*opt.nbv, "NBV", label_color(Label::kNbv));
+  for (const SliceRoom& room : opt.rooms)
+    img.boxed_text(px(room.label_at.x), py(room.label_at.y), room.label, 12, kRoomOutline);
 
   // Axes: map coordinates in metres, a tick every 1, 2, 5 or 10 m.
   const double x_min = double(min_cell[0]) * r, y_min = double(min_cell[1]) * r;
@@ -161,6 +175,15 @@ void write_slice_png(const SemiOcTree& tree, const std::string& path, const Slic
   img.disc(lx + 11, ly + 8, 6, label_color(Label::kNbv), kWhite);
   img.text(lx + 30, ly + 8, "next best view (NBV)", 13, kBlack);
   ly += 24;
+  img.line(lx, ly + 8, lx + 22, ly + 8, kBlack, 1.5);
+  img.text(lx + 30, ly + 8, opt.routes.empty() ? "scans in order" : "the robot's route", 13,
+           kBlack);
+  ly += 24;
+  if (!opt.rooms.empty()) {
+    img.line(lx, ly + 8, lx + 22, ly + 8, kRoomOutline, 2.5);
+    img.text(lx + 30, ly + 8, "room (as in survey.json)", 13, kBlack);
+    ly += 24;
+  }
   if (!opt.openings.empty()) {
     img.text(lx, ly + 8, "Bars D1…, W1…: doors and windows", 11, kBlack);
     ly += 15;

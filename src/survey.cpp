@@ -617,12 +617,14 @@ std::optional<Waypoint> Survey::waypoint_toward(const Point3& from, const Point3
   return best;
 }
 
-std::optional<double> Survey::path_between(const Point3& from, const Point3& to) const {
+std::optional<Survey::Drive> Survey::drive_between(const Point3& from, const Point3& to) const {
   std::vector<double> path_m;
+  RouteTree routes;
   const std::vector<Point3> positions = find_candidates(
-      map_.tree(), params_.robot, from, map_.scanners(), nbv_params(), nullptr, &path_m);
+      map_.tree(), params_.robot, from, map_.scanners(), nbv_params(), nullptr, &path_m, &routes);
   for (std::size_t i = 0; i < positions.size(); ++i)
-    if (positions[i].x == to.x && positions[i].y == to.y) return path_m[i];
+    if (positions[i].x == to.x && positions[i].y == to.y)
+      return Drive{path_m[i], routes.route_to(to)};
   return std::nullopt;
 }
 
@@ -631,6 +633,7 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
   std::optional<Point3> target;         // where the platform was sent (none: the first scan)
   std::optional<double> predicted;      // the overlap predicted there
   std::optional<double> path;           // the robot's path there
+  std::vector<Point3> route;            // and its route
   std::vector<Point3> failed_in_a_row;  // where the scans since the last placed one failed
   double failed_path_m = 0;             // the path from the last placed scan to the first
   for (std::size_t i = records_.size(); i < params_.max_scans;) {
@@ -645,6 +648,7 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
       f.position = target.value_or(Point3());
       f.error = e.what();
       f.path_m = path;
+      f.route = route;
       if (target) {
         if (failed_in_a_row.empty()) failed_path_m = path.value_or(0.0);
         failed_in_a_row.push_back(*target);
@@ -664,7 +668,9 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
         return out;
       }
       // The robot stands at the failed position: its way back there.
-      path = path_between(*target, *f.retry);
+      std::optional<Drive> drive = drive_between(*target, *f.retry);
+      path = drive ? std::optional<double>(drive->m) : std::nullopt;
+      route = drive ? std::move(drive->route) : std::vector<Point3>{};
       out.path_m += path.value_or(0.0);
       platform.move_to(*f.retry);
       target = f.retry;
@@ -676,6 +682,7 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
     ++i;
     records_.back().predicted_overlap = predicted;
     records_.back().path_m = path;
+    records_.back().route = route;
     const ScanRecord& rec = records_.back();
     platform.placed(rec.scanner_to_survey);
     observer_->scan_done(rec, map_);
@@ -695,8 +702,11 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
           return c.position.x == next.position.x && c.position.y == next.position.y;
         });
     const bool known = chosen != rec.nbv.candidates.end();
-    path =
-        known ? std::optional<double>(chosen->path_m) : path_between(rec.scanner(), next.position);
+    std::optional<Drive> drive = drive_between(rec.scanner(), next.position);
+    path = known   ? std::optional<double>(chosen->path_m)
+           : drive ? std::optional<double>(drive->m)
+                   : std::nullopt;
+    route = drive ? std::move(drive->route) : std::vector<Point3>{};
     if (params_.max_path_m && out.path_m + path.value_or(0.0) > *params_.max_path_m) {
       out.stopped_because = StopReason::kMaxPath;
       return out;

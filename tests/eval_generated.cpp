@@ -8,14 +8,15 @@
 // --check exits 1 when the totals miss the acceptance thresholds
 // (docs/generated-scenes.md).
 //
-//   eval_generated [--seeds 1-50] [--kind any|room|l-shape|hall] [--threads T]
-//                  [--max-scans N] [--cache DIR] [--check]
+//   eval_generated [--seeds 1-50] [--kind any|room|l-shape|hall|floor] [--rooms R]
+//                  [--threads T] [--max-scans N] [--cache DIR] [--check]
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -37,6 +38,7 @@ namespace {
 struct Options {
   std::string seeds = "1-50";
   std::string kind = "any";
+  int rooms = 0;
   unsigned threads = 0;
   int max_scans = 10;
   std::string cache;
@@ -80,7 +82,7 @@ SceneResult evaluate(std::uint64_t seed, sim::GeneratedKind asked, const Options
   j["seed"] = seed;
   j["kind"] = sim::to_string(kind);
   try {
-    const sim::Scene scene = sim::generate_scene(seed, kind);
+    const sim::Scene scene = sim::generate_scene(seed, kind, o.rooms);
     j["name"] = scene.name;
     j["robot_radius"] = scene.robot.radius;
     j["scanner_height"] = scene.scanner.height;
@@ -136,6 +138,19 @@ SceneResult evaluate(std::uint64_t seed, sim::GeneratedKind asked, const Options
           {"already_scanned", c.already_scanned},   {"feasible", c.feasible}};
     }
 
+    if (!survey.records().empty() && survey.records().back().scope == SurveyScope::kFloor) {
+      // The scene's rooms (the floor plan's, inside the survey area) against the map's.
+      std::set<int> true_rooms;
+      for (std::size_t i = 0; i < plan.room.size(); ++i)
+        if (plan.survey[i] && plan.room[i] >= 0) true_rooms.insert(plan.room[i]);
+      std::size_t complete = 0;
+      for (const RoomStatus& room : survey.records().back().rooms)
+        complete += room.state == RoomState::kComplete;
+      j["rooms"] = {{"in_scene", true_rooms.size()},
+                    {"found", survey.records().back().rooms.size()},
+                    {"complete", complete}};
+    }
+    j["path_m"] = outcome.path_m;
     r.coverage = coverage.count().percent;
     j["coverage_percent"] = r.coverage;
 
@@ -144,8 +159,11 @@ SceneResult evaluate(std::uint64_t seed, sim::GeneratedKind asked, const Options
       max_m = std::max(max_m, t.pose_error_m), max_deg = std::max(max_deg, t.pose_error_deg);
     j["pose_error"] = {{"max_m", max_m}, {"max_deg", max_deg}};
 
+    // A room's own openings; every opening of a floor (those of the outside ring: none).
     const std::vector<sim::OpeningRect> truths =
-        sim_platform::openings_of_room(truth, plan, plan.start_room);
+        kind == sim::GeneratedKind::floor
+            ? sim::opening_rects(scene)
+            : sim_platform::openings_of_room(truth, plan, plan.start_room);
     const sim_platform::OpeningsMatch m = sim_platform::match_openings(
         survey.map().openings(), truths, platform.survey_to_world().inverse());
     // In view: the hole's centre seen from some scan's true optical centre.
@@ -199,9 +217,13 @@ int main(int argc, char** argv) {
       "coverage of the reference, openings precision/recall, pose error, seconds (JSON on "
       "stdout, a line per scene on stderr)."};
   app.add_option("--seeds", o.seeds, "seeds A-B (inclusive) or one seed N")->capture_default_str();
-  app.add_option("--kind", o.kind, "scene kind: any (drawn from each seed), room, l-shape, hall")
+  app.add_option("--kind", o.kind,
+                 "scene kind: any (room, l-shape or hall, drawn from each seed), room, l-shape, "
+                 "hall, floor")
       ->check(CLI::IsMember(sim::generated_kind_names()))
       ->capture_default_str();
+  app.add_option("--rooms", o.rooms, "--kind floor: rooms of each floor (default: drawn, 3-10)")
+      ->check(CLI::Range(sim::kMinFloorRooms, sim::kMaxFloorRooms));
   app.add_option("--threads", o.threads, "worker threads of each survey (0: one per core)")
       ->check(CLI::Range(0u, 256u))
       ->capture_default_str();

@@ -149,6 +149,25 @@ TEST(SliceImage, ShowsEachLabelInItsColourAndTheScanner) {
   EXPECT_FALSE(same(at(0.4, 0.65), label_color(Label::kWindow)));  // and only there
   EXPECT_THROW(write_slice_png(SemiOcTree(0.05, 0.4), (dir / "e.png").string(), o),
                std::invalid_argument);
+
+  // A route drawn instead of the straight line between scans, and a room's outline.
+  o.scans = {Point3(0.3, 0.3, 0.125), Point3(0.9, 0.6, 0.125)};
+  o.nbv.reset();
+  o.routes = {{Point3(0.3, 0.3, 0), Point3(0.3, 0.6, 0), Point3(0.9, 0.6, 0)}};
+  o.rooms = {{{{0.2f, 0.2f, 1.0f, 0.2f}}, Point3(1.0, 0.75, 0), "R0"}};
+  write_slice_png(t, (dir / "r.png").string(), o);
+  const auto routed = read_png((dir / "r.png").string());
+  ASSERT_FALSE(routed.empty());
+  auto at_r = [&](double x, double y) {
+    return routed[std::size_t(36 + 160 - int(y / 0.05 * 10))][std::size_t(56 + int(x / 0.05 * 10))];
+  };
+  // Drawn over the map (lines 1.5 px wide, antialiased: not pure black) where the route
+  // runs, and nothing drawn on the straight line between the scans. (Points a hair off
+  // a pixel boundary: 0.6 / 0.05 * 10 rounds down to the pixel row past the line.)
+  EXPECT_FALSE(same(at_r(0.3, 0.45), at(0.3, 0.45)));          // on the route's first leg
+  EXPECT_FALSE(same(at_r(0.775, 0.6025), at(0.775, 0.6025)));  // on its second
+  EXPECT_TRUE(same(at_r(0.6, 0.45), at(0.6, 0.45)));           // the straight line's middle
+  EXPECT_TRUE(same(at_r(0.8, 0.2), slice_room_color()));
 }
 
 }  // namespace

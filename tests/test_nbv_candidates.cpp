@@ -307,7 +307,9 @@ TEST(Nbv, CandidatePathsGoAroundObstacles) {
   // go round its end (y > 3.0 + radius) to reach x = 3.6.
   m.leaves({2.4, 0, 0}, {2.45, 3.0, 2.4}, Label::kOccupied);
   std::vector<double> path;
-  const std::vector<Point3> behind = find_candidates(m.t, robot, start, {}, p, nullptr, &path);
+  RouteTree routes;
+  const std::vector<Point3> behind =
+      find_candidates(m.t, robot, start, {}, p, nullptr, &path, &routes);
   bool checked = false;
   for (std::size_t i = 0; i < behind.size(); ++i) {
     const Point3& c = behind[i];
@@ -316,9 +318,31 @@ TEST(Nbv, CandidatePathsGoAroundObstacles) {
     const double round_end = std::hypot(2.425 - start.x, 3.0 + robot.radius - start.y) +
                              std::hypot(c.x - 2.425, 3.0 + robot.radius - c.y);
     EXPECT_GE(path[i], round_end - 2 * slack) << c.x << ", " << c.y;
+    // The route: from the robot's cell to the candidate, as long as the path, round the
+    // partition's end, never across it.
+    const std::vector<Point3> route = routes.route_to(c);
+    ASSERT_GE(route.size(), 3u);
+    EXPECT_LE(std::hypot(route.front().x - start.x, route.front().y - start.y), kLeaf);
+    EXPECT_EQ(route.back().x, c.x);
+    EXPECT_EQ(route.back().y, c.y);
+    double length = 0, highest = 0;
+    for (std::size_t k = 0; k + 1 < route.size(); ++k) {
+      const Point3 &a = route[k], &b = route[k + 1];
+      length += std::hypot(b.x - a.x, b.y - a.y);
+      highest = std::max(highest, b.y);
+      if ((a.x < 2.425) != (b.x < 2.425)) {  // crosses the partition's line: above its end
+        const double y = a.y + (b.y - a.y) * (2.425 - a.x) / (b.x - a.x);
+        EXPECT_GT(y, 3.0 + robot.radius - slack);
+      }
+    }
+    EXPECT_NEAR(length, path[i], 1e-3);
+    EXPECT_GT(highest, 3.0 + robot.radius - slack);
     checked = true;
   }
   EXPECT_TRUE(checked);
+  // A position not reached, or off the plane, has no route.
+  EXPECT_TRUE(routes.route_to(Point3(100, 100, 0)).empty());
+  EXPECT_TRUE(routes.route_to(Point3(2.425, 1.0, 0)).empty());  // in the partition
 }
 
 TEST(Nbv, BlindZoneUnderPastScansIsNotAnObstacle) {

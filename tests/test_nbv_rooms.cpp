@@ -124,6 +124,32 @@ TEST(NbvRooms, AnLShapedRoomIsItsCellsNotItsBox) {
   EXPECT_NEAR((l.max.x - l.min.x) * (l.max.y - l.min.y), 4.8 * 4.8, 1e-9);  // its box
   EXPECT_FALSE(rooms.room_at(Point3(3.6, 3.6, 0)));
   EXPECT_EQ(rooms.room_at(Point3(1.2, 3.6, 0)), std::optional<std::size_t>(0));
+  // Its outline: six sides, 4 × 4.8 m long in all (as its box's), joined into 8 segments
+  // (the two long sides split where the other arm starts: rows and columns are joined only
+  // where the same cells face the same way); the point for its label lies inside it.
+  double length = 0;
+  for (const auto& e : l.outline) {
+    EXPECT_TRUE(e[0] == e[2] || e[1] == e[3]);  // along a row or a column
+    length += std::hypot(double(e[2] - e[0]), double(e[3] - e[1]));
+  }
+  EXPECT_NEAR(length, 4 * 4.8, 1e-4);
+  EXPECT_LE(l.outline.size(), 8u);
+  EXPECT_EQ(rooms.room_at(l.inner), std::optional<std::size_t>(0));
+}
+
+// Each of two rooms a door apart is outlined on its own: the door's line closes it.
+TEST(NbvRooms, RoomsAreOutlinedAlongTheirCells) {
+  TwoRooms m(true);
+  const RoomMap rooms = segment_rooms(m.t, kHeight, 0.0, 2.4, {door_at_x4()});
+  ASSERT_EQ(rooms.rooms().size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const Room& room = rooms.rooms()[i];
+    double length = 0;
+    for (const auto& e : room.outline)
+      length += std::hypot(double(e[2] - e[0]), double(e[3] - e[1]));
+    EXPECT_NEAR(length, 2 * ((room.max.x - room.min.x) + (room.max.y - room.min.y)), 1e-4) << i;
+    EXPECT_EQ(rooms.room_at(room.inner), std::optional<std::size_t>(i));
+  }
 }
 
 // Space seen through a window (out) is a room of its own beyond it; an opening whose one

@@ -28,8 +28,8 @@ using semioctree::testing::slurp;
 constexpr std::uint64_t kSeeds = 60;
 
 TEST(SceneGenerator, SameSeedSameTextOtherSeedOtherText) {
-  for (GeneratedKind k :
-       {GeneratedKind::any, GeneratedKind::room, GeneratedKind::l_shape, GeneratedKind::hall}) {
+  for (GeneratedKind k : {GeneratedKind::any, GeneratedKind::room, GeneratedKind::l_shape,
+                          GeneratedKind::hall, GeneratedKind::floor}) {
     EXPECT_EQ(generate_scene_json(7, k), generate_scene_json(7, k)) << to_string(k);
     EXPECT_NE(generate_scene_json(7, k), generate_scene_json(8, k)) << to_string(k);
   }
@@ -142,41 +142,101 @@ bool robot_fits(const GroundTruth& truth, const Eigen::Vector2d& p) {
   return true;
 }
 
-// Every opening is a clear hole onto outside space, the start is free, and every point
-// of a 0.5 m grid over the survey area where the robot can stand is reachable from the
-// start (the passages between obstacles are wide enough for it).
+// Every opening is a clear hole with floor beyond it (outside space, or the next room of a
+// floor), the start is free, and every point of a 0.5 m grid over the survey area where
+// the robot can stand is reachable from the start (the passages between obstacles, and a
+// floor's doors, are wide enough for it). Returns the floor plan.
+FloorPlan expect_valid_layout(const Scene& s) {
+  const GroundTruth truth(s);
+  EXPECT_TRUE(truth.standing_free(s.robot.start));
+  for (const OpeningRect& o : truth.openings()) {
+    const Eigen::Vector3d c = 0.25 * (o.corners[0] + o.corners[1] + o.corners[2] + o.corners[3]);
+    const Eigen::Vector3d n = o.normal;  // left of from → to
+    // Through the hole, 0.5 m to the left and 1 m to the right, with floor there.
+    EXPECT_TRUE(truth.segment_free(c + 0.5 * n, c - 1.0 * n)) << to_string(o.kind);
+    const Eigen::Vector3d beyond = c - 1.0 * n;
+    EXPECT_FALSE(truth.segment_free(beyond, beyond - Eigen::Vector3d(0, 0, c.z() + 0.1)))
+        << "no floor beyond the " << to_string(o.kind);
+  }
+  FloorPlan plan = truth.floor_plan(0.05);
+  std::size_t standable = 0, unreachable = 0;
+  Eigen::Vector2d lo(1e9, 1e9), hi(-1e9, -1e9);
+  for (const auto& p : *s.survey_area) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  for (double x = lo.x() + 0.25; x < hi.x(); x += 0.5)
+    for (double y = lo.y() + 0.25; y < hi.y(); y += 0.5) {
+      const Eigen::Vector2d p(x, y);
+      if (!point_in_polygon(*s.survey_area, p) || !robot_fits(truth, p)) continue;
+      ++standable;
+      if (!plan.reachable_near(p)) {
+        ++unreachable;
+        ADD_FAILURE() << "the robot fits at (" << x << ", " << y << ") but cannot get there";
+      }
+    }
+  EXPECT_GT(standable, 0u);
+  EXPECT_EQ(unreachable, 0u);
+  return plan;
+}
+
 TEST(SceneGenerator, OpeningsClearStartFreeFloorReachable) {
   for (std::uint64_t seed = 1; seed <= kSeeds; seed += 3) {
     SCOPED_TRACE("seed " + std::to_string(seed));
-    const Scene s = generate_scene(seed);
-    const GroundTruth truth(s);
-    EXPECT_TRUE(truth.standing_free(s.robot.start));
-    for (const OpeningRect& o : truth.openings()) {
-      const Eigen::Vector3d c = 0.25 * (o.corners[0] + o.corners[1] + o.corners[2] + o.corners[3]);
-      const Eigen::Vector3d n = o.normal;  // into the room (left of from → to)
-      // Through the hole, 0.5 m either side, and 1 m on outside (the floor beyond).
-      EXPECT_TRUE(truth.segment_free(c + 0.5 * n, c - 1.0 * n)) << to_string(o.kind);
-      const Eigen::Vector3d outside = c - 1.0 * n;
-      EXPECT_FALSE(truth.segment_free(outside, outside - Eigen::Vector3d(0, 0, c.z() + 0.1)))
-          << "no floor outside the " << to_string(o.kind);
-    }
-    const FloorPlan plan = truth.floor_plan(0.05);
-    std::size_t standable = 0, unreachable = 0;
-    Eigen::Vector2d lo(1e9, 1e9), hi(-1e9, -1e9);
-    for (const auto& p : *s.survey_area) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-    for (double x = lo.x() + 0.25; x < hi.x(); x += 0.5)
-      for (double y = lo.y() + 0.25; y < hi.y(); y += 0.5) {
-        const Eigen::Vector2d p(x, y);
-        if (!point_in_polygon(*s.survey_area, p) || !robot_fits(truth, p)) continue;
-        ++standable;
-        if (!plan.reachable_near(p)) {
-          ++unreachable;
-          ADD_FAILURE() << "the robot fits at (" << x << ", " << y << ") but cannot get there";
-        }
-      }
-    EXPECT_GT(standable, 0u);
-    EXPECT_EQ(unreachable, 0u);
+    expect_valid_layout(generate_scene(seed));
   }
+}
+
+// The rooms of a floor's plan inside its survey area (the outside ring excluded).
+std::set<int> rooms_inside(const FloorPlan& plan) {
+  std::set<int> rooms;
+  for (std::size_t i = 0; i < plan.room.size(); ++i)
+    if (plan.survey[i] && plan.room[i] >= 0) rooms.insert(plan.room[i]);
+  return rooms;
+}
+
+// Floors: as many rooms as drawn (3-10) or asked, each at least 3 m across, every one
+// reachable through doors the robot passes, and the layout rules of single rooms.
+TEST(SceneGenerator, FloorsHaveTheirRoomsJoinedByDoorsTheRobotPasses) {
+  std::set<std::size_t> counts;
+  int corridors = 0;
+  for (std::uint64_t seed = 1; seed <= 12; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const Scene s = generate_scene(seed, GeneratedKind::floor);
+    corridors += s.description.find("corridor") != std::string::npos;
+    const FloorPlan plan = expect_valid_layout(s);
+    const std::set<int> rooms = rooms_inside(plan);
+    EXPECT_GE(rooms.size(), 3u);
+    EXPECT_LE(rooms.size(), 10u);
+    counts.insert(rooms.size());
+    for (int r : rooms) EXPECT_GE(plan.room_area[std::size_t(r)], 9.0) << "room " << r;
+    EXPECT_TRUE(plan.reachable_near(s.robot.start));
+    for (const Wall& w : s.walls)
+      for (const Opening& o : w.openings)
+        if (o.kind == OpeningKind::door) {
+          EXPECT_GE(o.width, 2 * s.robot.radius + 0.3 - 1e-3);
+        }
+  }
+  EXPECT_GE(counts.size(), 4u);  // the seeds vary the count
+  EXPECT_GT(corridors, 0);       // and the layout
+  EXPECT_LT(corridors, 12);
+  for (int asked : {kMinFloorRooms, 5, kMaxFloorRooms}) {
+    SCOPED_TRACE(std::to_string(asked) + " rooms asked");
+    const Scene s = generate_scene(3, GeneratedKind::floor, asked);
+    EXPECT_EQ(rooms_inside(expect_valid_layout(s)).size(), std::size_t(asked));
+  }
+}
+
+TEST(SceneGenerator, AFloorAskedForTheRoomsItsSeedDrawsIsTheSameButForItsName) {
+  const Scene drawn = generate_scene(4, GeneratedKind::floor);
+  const int count = int(rooms_inside(GroundTruth(drawn).floor_plan(0.05)).size());
+  std::string asked = generate_scene_json(4, GeneratedKind::floor, count);
+  const std::string suffix = "-" + std::to_string(count) + "-rooms";
+  const std::size_t at = asked.find(suffix);
+  ASSERT_NE(at, std::string::npos);
+  asked.erase(at, suffix.size());
+  EXPECT_EQ(asked, generate_scene_json(4, GeneratedKind::floor));
+  EXPECT_THROW(generate_scene_json(4, GeneratedKind::floor, kMaxFloorRooms + 1),
+               std::invalid_argument);
+  EXPECT_THROW(generate_scene_json(4, GeneratedKind::floor, 1), std::invalid_argument);
+  EXPECT_THROW(generate_scene_json(4, GeneratedKind::room, 5), std::invalid_argument);
 }
 
 TEST(MakeSceneCommand, WritesASceneThatSceneInfoAccepts) {

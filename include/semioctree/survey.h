@@ -148,6 +148,9 @@ struct ScanRecord {
   // before, or a scan that could not be registered), over the cells its safety cylinder
   // clears (NbvCandidate::path_m); none for the first scan.
   std::optional<double> path_m;
+  // Survey::run: that path itself (RouteTree::route_to: the robot's cell, its turns, the
+  // scan's cell); empty for the first scan.
+  std::vector<Point3> route;
   struct Seconds {
     double preprocess = 0, registration = 0, occupancy = 0, openings = 0, occlusion = 0, nbv = 0,
            total = 0;
@@ -205,6 +208,7 @@ struct RegistrationFailure {
   std::string error;
   std::optional<Point3> retry;   // the recovery position; none: the survey ended
   std::optional<double> path_m;  // the robot's path to `position` (as ScanRecord::path_m)
+  std::vector<Point3> route;     // and that path (as ScanRecord::route)
 };
 
 // Where the scans come from and how the scanner moves.
@@ -319,9 +323,13 @@ class Survey {
   // The overlap a scan at `position` is predicted to have with the map (as the NBV's
   // candidates are judged).
   double predicted_overlap_at(const Point3& position) const;
-  // The robot's path from `from` to `to` (a candidate of the last scan), m; none if `to`
-  // is no candidate from there.
-  std::optional<double> path_between(const Point3& from, const Point3& to) const;
+  // The robot's path from `from` to `to` (a candidate of the last scan): its length (m)
+  // and route (RouteTree::route_to); none if `to` is no candidate from there.
+  struct Drive {
+    double m = 0;
+    std::vector<Point3> route;
+  };
+  std::optional<Drive> drive_between(const Point3& from, const Point3& to) const;
 
   SurveyParams params_;
   SurveyObserver* observer_;

@@ -14,6 +14,7 @@
 #include <random>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 #include "semioctree/sim/geometry.h"
 
@@ -31,21 +32,23 @@ const char* to_string(GeneratedKind kind) {
       return "l-shape";
     case GeneratedKind::hall:
       return "hall";
+    case GeneratedKind::floor:
+      return "floor";
     default:
       return "any";
   }
 }
 
 std::vector<std::string> generated_kind_names() {
-  return {"any", "room", "l-shape", "hall"};
+  return {"any", "room", "l-shape", "hall", "floor"};
 }
 
 GeneratedKind generated_kind_from_string(const std::string& name) {
-  for (GeneratedKind k :
-       {GeneratedKind::any, GeneratedKind::room, GeneratedKind::l_shape, GeneratedKind::hall})
+  for (GeneratedKind k : {GeneratedKind::any, GeneratedKind::room, GeneratedKind::l_shape,
+                          GeneratedKind::hall, GeneratedKind::floor})
     if (name == to_string(k)) return k;
   throw std::invalid_argument("unknown scene kind '" + name +
-                              "': expected any, room, l-shape or hall");
+                              "': expected any, room, l-shape, hall or floor");
 }
 
 namespace {
@@ -141,7 +144,41 @@ struct Footprint {
 // The room's outline (counter-clockwise, interior faces of the walls).
 struct Outline {
   Polygon polygon;
-  double width = 0, depth = 0;  // bounding box [0, width] × [0, depth]
+  Vec2 lo = Vec2::Zero();
+  double width = 0, depth = 0;  // bounding box lo + [0, width] × [0, depth]
+};
+
+Outline rectangle(double x0, double y0, double x1, double y1) {
+  return {{{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}}, {x0, y0}, x1 - x0, y1 - y0};
+}
+
+// A floor of rooms (docs/generated-scenes.md, "Floors"): rectangular cells between the
+// centre lines of the walls that part them (a cell side on the floor's outline is the
+// outer wall's interior face), those walls, and the doors that join the cells.
+struct Cell {
+  double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  bool corridor = false;
+};
+struct Split {  // an inner wall's centre line: y = at for x in [lo, hi] (along_x), or x = at
+  bool along_x = true;
+  double at = 0, lo = 0, hi = 0;
+};
+// Two cells sharing [u0, u1] of split `split` (`low` on the side of smaller coordinates).
+struct Adjacency {
+  std::size_t low = 0, high = 0, split = 0;
+  double u0 = 0, u1 = 0;
+};
+struct Door {
+  std::size_t split = 0;
+  double s0 = 0, s1 = 0;  // along the split's axis
+  double height = 0;
+};
+
+// An opening cut into an outline edge, along the edge's interior face from its first corner.
+struct Hole {
+  std::string kind;
+  double s0, s1;
+  double sill, height;
 };
 
 struct Generator {
@@ -163,18 +200,37 @@ struct Generator {
        cylinders = json::array();
   std::vector<std::string> summary;
 
-  Generator(std::uint64_t s, GeneratedKind k) : draw(s), kind(k), seed(s) {}
+  // A floor's layout.
+  int rooms_asked = 0;
+  double inner_thickness = 0;
+  std::vector<Cell> cells;
+  std::vector<Split> splits;
+  std::vector<Door> doors;
+
+  Generator(std::uint64_t s, GeneratedKind k, int rooms)
+      : draw(s), kind(k), seed(s), rooms_asked(rooms) {}
 
   json run();
+  json run_floor();
+  json scene_json(const json& robot, const json& scanner) const;
   void make_outline();
   void make_walls_and_openings();
+  void write_outline_walls(std::vector<std::vector<Hole>>& holes);
   void make_outside_and_slabs();
   void make_mezzanine();
   void make_columns();
-  void make_wall_furniture();
-  void make_free_furniture();
-  json make_robot();
-  json make_scanner();
+  int make_wall_furniture();
+  int make_free_furniture();
+  std::optional<json> make_robot();
+  json make_scanner(double diagonal);
+  // Floors.
+  bool partition_layout(int rooms, double min_side);
+  bool corridor_layout(int rooms, double min_side);
+  std::vector<Adjacency> adjacencies(double min_shared) const;
+  bool make_doors(double min_shared);
+  void make_floor_windows(std::vector<std::vector<Hole>>& holes);
+  void write_inner_walls();
+  Outline interior(const Cell& c) const;
 
   Vec2 outward(std::size_t edge) const {
     const Vec2 d = edge_direction(edge);
@@ -222,9 +278,11 @@ struct Generator {
     cylinders.push_back(
         {{"center", xy(c)}, {"radius", mm(r)}, {"z0", mm(z0)}, {"z1", mm(z1)}, {"name", name}});
   }
+  // y drawn before x: the order the single-room scenes were first generated in.
   Vec2 random_point_in_room() {
     for (;;) {
-      const Vec2 p(draw.real(0, room.width), draw.real(0, room.depth));
+      const double y = draw.real(0, room.depth), x = draw.real(0, room.width);
+      const Vec2 p = room.lo + Vec2(x, y);
       if (point_in_polygon(room.polygon, p)) return p;
     }
   }
@@ -265,17 +323,6 @@ void Generator::make_outline() {
 void Generator::make_walls_and_openings() {
   const Polygon& p = room.polygon;
   const std::size_t n = p.size();
-  const double t = wall_thickness;
-  // Centre lines: the outline offset outwards by t/2 (rectilinear: corner + both edges'
-  // normals), each wall continued t/2 past its corners so that the corners close.
-  std::vector<Vec2> centre_corner(n);
-  for (std::size_t i = 0; i < n; ++i)
-    centre_corner[i] = p[i] + 0.5 * t * (outward((i + n - 1) % n) + outward(i));
-  struct Hole {
-    std::string kind;
-    double s0, s1;  // along the interior edge from its first corner
-    double sill, height;
-  };
   std::vector<std::vector<Hole>> holes(n);
   auto place = [&](const std::string& what, double width, double sill, double hole_height) {
     const double margin = 0.5, gap = 0.5;
@@ -325,6 +372,19 @@ void Generator::make_walls_and_openings() {
   }
   summary.push_back(std::to_string(placed_doors) + " doors, " + std::to_string(placed_windows) +
                     " windows");
+  write_outline_walls(holes);
+}
+
+// The walls around the outline, their openings `holes` (per edge).
+void Generator::write_outline_walls(std::vector<std::vector<Hole>>& holes) {
+  const Polygon& p = room.polygon;
+  const std::size_t n = p.size();
+  const double t = wall_thickness;
+  // Centre lines: the outline offset outwards by t/2 (rectilinear: corner + both edges'
+  // normals), each wall continued t/2 past its corners so that the corners close.
+  std::vector<Vec2> centre_corner(n);
+  for (std::size_t i = 0; i < n; ++i)
+    centre_corner[i] = p[i] + 0.5 * t * (outward((i + n - 1) % n) + outward(i));
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t j = (i + 1) % n;
     const Vec2 d = edge_direction(i);
@@ -377,8 +437,10 @@ void Generator::make_outside_and_slabs() {
     Polygon roof(n);
     for (std::size_t i = 0; i < n; ++i)
       roof[i] = p[i] + t * (outward((i + n - 1) % n) + outward(i));
-    slabs.push_back(
-        {{"_", "ceiling"}, {"polygon", polygon_json(roof)}, {"z0", height}, {"z1", mm(height + 0.2)}});
+    slabs.push_back({{"_", "ceiling"},
+                     {"polygon", polygon_json(roof)},
+                     {"z0", height},
+                     {"z1", mm(height + 0.2)}});
   }
 }
 
@@ -447,7 +509,7 @@ void Generator::make_columns() {
   if (count) summary.push_back(std::to_string(count) + " columns");
 }
 
-void Generator::make_wall_furniture() {
+int Generator::make_wall_furniture() {
   const Polygon& p = room.polygon;
   double perimeter = 0;
   for (std::size_t e = 0; e < p.size(); ++e) perimeter += edge_length(e);
@@ -473,10 +535,10 @@ void Generator::make_wall_furniture() {
     obstacles.push_back(fp);
     ++i, ++placed;
   }
-  if (placed) summary.push_back(std::to_string(placed) + " benches and cabinets along the walls");
+  return placed;
 }
 
-void Generator::make_free_furniture() {
+int Generator::make_free_furniture() {
   double area = std::abs(signed_area(room.polygon));
   const double per = kind == GeneratedKind::hall ? 25.0 : 12.0;
   const int wanted = draw.integer(0, std::max(1, int(area / per)));
@@ -523,35 +585,33 @@ void Generator::make_free_furniture() {
     }
     ++i, ++placed;
   }
-  if (placed)
-    summary.push_back(std::to_string(placed) + " free-standing tables, poles, cabinets" +
-                      (kind == GeneratedKind::hall ? ", machines" : ""));
+  return placed;
 }
 
-json Generator::make_robot() {
+std::optional<json> Generator::make_robot() {
   // On free floor, its cylinder (and 0.15 m more) clear of walls, the columns and the
   // mezzanine's legs, and outside the zones in front of openings; then that square is
   // kept free of the furniture placed after. Columns stand a passage apart, so such a
   // point exists in every outline (each arm is at least 3 m wide).
   const double clear = robot_radius + 0.15;
   for (int attempt = 0; attempt < 100000; ++attempt) {
-    const Vec2 c(mm(draw.real(0, room.width)), mm(draw.real(0, room.depth)));
+    const double y = draw.real(0, room.depth), x = draw.real(0, room.width);  // as first made
+    const Vec2 c(mm(room.lo.x() + x), mm(room.lo.y() + y));
     const Polygon square = Footprint{c, 2 * clear, 2 * clear, 0}.corners();
     if (!fits(square, 0.0, 0.0, 0.0) || distance_to_boundary(room.polygon, c) < clear) continue;
     bool free = true;
     for (const Polygon& o : obstacles) free = free && polygon_distance(square, o) > 0.0;
     if (!free) continue;
     keep_out.push_back(square);
-    return {
+    return json{
         {"start", xy(c)}, {"start_yaw_deg", mm(draw.real(-180, 180))}, {"radius", robot_radius}};
   }
-  throw std::logic_error("scene generator: no free start for seed " + std::to_string(seed));
+  return std::nullopt;
 }
 
-json Generator::make_scanner() {
+json Generator::make_scanner(double diagonal) {
   // Angular step: about 3 cm between neighbouring rays at the far side of the room (its
   // diagonal), kept between 0.1° and 0.15° (5.4 to 2.4 million rays a scan).
-  const double diagonal = std::hypot(room.width, room.depth);
   const double step =
       std::round(std::clamp(0.03 / diagonal * 180.0 / M_PI, 0.1, 0.15) * 100.0) / 100.0;
   const double el_min = mm(draw.real(-90, -30)), el_max = mm(draw.real(30, 90));
@@ -562,7 +622,298 @@ json Generator::make_scanner() {
           {"elevation_max_deg", el_max}};
 }
 
+// ---- Floors ----------------------------------------------------------------------------
+
+Outline Generator::interior(const Cell& c) const {
+  const double h = 0.5 * inner_thickness, w = room.width, d = room.depth;
+  return rectangle(c.x0 + (c.x0 > 1e-9 ? h : 0), c.y0 + (c.y0 > 1e-9 ? h : 0),
+                   c.x1 - (c.x1 < w - 1e-9 ? h : 0), c.y1 - (c.y1 < d - 1e-9 ? h : 0));
+}
+
+// Cuts a rectangle of about `rooms` × 12-28 m² into `rooms` cells: again and again the
+// largest cell that can be is cut across its longer side, at 35-65 %, each part keeping
+// `min_side` between centre lines. False if no cell can be cut before the count.
+bool Generator::partition_layout(int rooms, double min_side) {
+  const double area = rooms * draw.real(12, 28), aspect = draw.real(1.0, 1.8);
+  const double w = mm(std::sqrt(area * aspect)), d = mm(area / w);
+  room = rectangle(0, 0, w, d);
+  cells = {Cell{0, 0, w, d}};
+  splits.clear();
+  while (int(cells.size()) < rooms) {
+    std::ptrdiff_t best = -1;
+    double best_area = 0;
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      const Cell& c = cells[i];
+      const double a = (c.x1 - c.x0) * (c.y1 - c.y0);
+      if (std::max(c.x1 - c.x0, c.y1 - c.y0) >= 2 * min_side && a > best_area)
+        best = std::ptrdiff_t(i), best_area = a;
+    }
+    if (best < 0) return false;
+    const Cell c = cells[std::size_t(best)];
+    const bool across_x = c.x1 - c.x0 >= c.y1 - c.y0;  // the wall runs along y
+    const double lo = across_x ? c.x0 : c.y0, hi = across_x ? c.x1 : c.y1;
+    const double at =
+        mm(std::clamp(lo + draw.real(0.35, 0.65) * (hi - lo), lo + min_side, hi - min_side));
+    Cell a = c, b = c;
+    if (across_x) {
+      a.x1 = b.x0 = at;
+      splits.push_back({false, at, c.y0, c.y1});
+    } else {
+      a.y1 = b.y0 = at;
+      splits.push_back({true, at, c.x0, c.x1});
+    }
+    cells[std::size_t(best)] = a;
+    cells.push_back(b);
+  }
+  summary.push_back("floor " + num(w) + " x " + num(d) + " m of " + std::to_string(rooms) +
+                    " rooms cut from one rectangle");
+  return true;
+}
+
+// A corridor along x with `rooms` - 1 rooms off it, half on each side (the south side takes
+// the odd one); rooms 3.5-6 m deep, each `min_side` wide or more; the north side's widths
+// share the south side's length.
+bool Generator::corridor_layout(int rooms, double min_side) {
+  const int side_rooms = rooms - 1, south = (side_rooms + 1) / 2, north = side_rooms - south;
+  if (north < 1) return false;
+  const double corridor = mm(std::max(1.4, passage + 0.4) + draw.real(0, 1.0));
+  const double south_depth = mm(draw.real(3.5, 6.0)), north_depth = mm(draw.real(3.5, 6.0));
+  std::vector<double> south_widths, north_weights;
+  double length = 0, weight_sum = 0;
+  for (int i = 0; i < south; ++i) {
+    south_widths.push_back(mm(min_side + draw.real(0, 3.0)));
+    length += south_widths.back();
+  }
+  for (int i = 0; i < north; ++i) {
+    north_weights.push_back(draw.real(0.2, 1.0));
+    weight_sum += north_weights.back();
+  }
+  const double y_south = south_depth, y_north = south_depth + corridor;
+  const double d = y_north + north_depth;
+  room = rectangle(0, 0, length, d);
+  cells.clear();
+  splits = {{true, y_south, 0, length}, {true, y_north, 0, length}};
+  double x = 0;
+  for (int i = 0; i < south; ++i) {
+    const double x1 = i + 1 < south ? mm(x + south_widths[std::size_t(i)]) : length;
+    cells.push_back({x, 0, x1, y_south});
+    if (i + 1 < south) splits.push_back({false, x1, 0, y_south});
+    x = x1;
+  }
+  cells.push_back({0, y_south, length, y_north, true});
+  const double spare = length - north * min_side;
+  x = 0;
+  for (int i = 0; i < north; ++i) {
+    const double x1 = i + 1 < north
+                          ? mm(x + min_side + spare * north_weights[std::size_t(i)] / weight_sum)
+                          : length;
+    cells.push_back({x, y_north, x1, d});
+    if (i + 1 < north) splits.push_back({false, x1, y_north, d});
+    x = x1;
+  }
+  summary.push_back("floor " + num(length) + " x " + num(d) + " m: a " + num(corridor, 2) +
+                    " m corridor with " + std::to_string(side_rooms) + " rooms off it");
+  return true;
+}
+
+std::vector<Adjacency> Generator::adjacencies(double min_shared) const {
+  std::vector<Adjacency> out;
+  for (std::size_t k = 0; k < splits.size(); ++k) {
+    const Split& s = splits[k];
+    for (std::size_t a = 0; a < cells.size(); ++a)
+      for (std::size_t b = 0; b < cells.size(); ++b) {
+        const Cell &ca = cells[a], &cb = cells[b];
+        const bool touch = s.along_x
+                               ? std::abs(ca.y1 - s.at) < 1e-9 && std::abs(cb.y0 - s.at) < 1e-9
+                               : std::abs(ca.x1 - s.at) < 1e-9 && std::abs(cb.x0 - s.at) < 1e-9;
+        if (!touch) continue;
+        const double u0 = std::max({s.lo, s.along_x ? ca.x0 : ca.y0, s.along_x ? cb.x0 : cb.y0});
+        const double u1 = std::min({s.hi, s.along_x ? ca.x1 : ca.y1, s.along_x ? cb.x1 : cb.y1});
+        if (u1 - u0 >= min_shared) out.push_back({a, b, k, u0, u1});
+      }
+  }
+  return out;
+}
+
+// Doors that join every cell to the others: on a corridor floor, each room onto the
+// corridor; otherwise a spanning tree of the cells sharing `min_shared` of wall, drawn in a
+// random order; then 20 % of the other shared walls get a door too. False if the cells
+// cannot all be joined.
+bool Generator::make_doors(double min_shared) {
+  std::vector<Adjacency> adj = adjacencies(min_shared);
+  for (std::size_t i = adj.size(); i > 1; --i)  // Fisher-Yates with the scene's draws
+    std::swap(adj[i - 1], adj[std::size_t(draw.integer(0, int(i) - 1))]);
+  std::vector<std::size_t> group(cells.size());
+  for (std::size_t i = 0; i < group.size(); ++i) group[i] = i;
+  const auto find = [&group](std::size_t i) {
+    while (group[i] != i) i = group[i] = group[group[i]];
+    return i;
+  };
+  const auto is_corridor = [this](const Adjacency& a) {
+    return cells[a.low].corridor || cells[a.high].corridor;
+  };
+  const bool has_corridor =
+      std::any_of(cells.begin(), cells.end(), [](const Cell& c) { return c.corridor; });
+  std::vector<const Adjacency*> joined;
+  std::size_t groups = cells.size();
+  for (const Adjacency& a : adj) {
+    const bool wanted = has_corridor ? is_corridor(a) : find(a.low) != find(a.high);
+    if (wanted || draw.chance(0.2)) {
+      joined.push_back(&a);
+      if (find(a.low) != find(a.high)) group[find(a.low)] = find(a.high), --groups;
+    }
+  }
+  if (groups != 1) return false;
+  doors.clear();
+  const double end_margin = 0.5 * inner_thickness + 0.3;
+  for (const Adjacency* a : joined) {
+    const double width = mm(std::max(draw.real(0.8, 1.2), passage));
+    const double s0 = mm(draw.real(a->u0 + end_margin, a->u1 - end_margin - width));
+    const double h = mm(std::min(draw.real(2.0, 2.4), height - 0.3));
+    doors.push_back({a->split, s0, s0 + width, h});
+    // Nothing stands in front of it, on either side.
+    const Split& s = splits[a->split];
+    const double depth = std::max(1.2, passage), near = 0.5 * inner_thickness;
+    for (double side : {-1.0, 1.0}) {
+      const double c0 = s.at + side * near, c1 = s.at + side * (near + depth);
+      const double u0 = s0 - 0.2, u1 = s0 + width + 0.2;
+      keep_out.push_back(s.along_x ? rectangle(u0, std::min(c0, c1), u1, std::max(c0, c1)).polygon
+                                   : rectangle(std::min(c0, c1), u0, std::max(c0, c1), u1).polygon);
+    }
+  }
+  return true;
+}
+
+// 0-2 windows in each cell's stretch of every outer wall it lies on (0-1 for the
+// corridor), 0.5 m from the stretch's ends and from each other.
+void Generator::make_floor_windows(std::vector<std::vector<Hole>>& holes) {
+  const double w = room.width, d = room.depth, end_margin = 0.5 * inner_thickness + 0.5;
+  int placed = 0;
+  for (const Cell& c : cells) {
+    // The outline's edges: 0 south (s = x), 1 east (s = y), 2 north (s = w - x), 3 west.
+    std::vector<std::tuple<std::size_t, double, double>> stretches;
+    if (c.y0 < 1e-9) stretches.emplace_back(0, c.x0, c.x1);
+    if (c.x1 > w - 1e-9) stretches.emplace_back(1, c.y0, c.y1);
+    if (c.y1 > d - 1e-9) stretches.emplace_back(2, w - c.x1, w - c.x0);
+    if (c.x0 < 1e-9) stretches.emplace_back(3, d - c.y1, d - c.y0);
+    for (const auto& [e, a, b] : stretches) {
+      const int wanted = draw.integer(0, c.corridor ? 1 : 2);
+      for (int i = 0; i < wanted; ++i) {
+        const double width = mm(draw.real(0.6, 2.0));
+        const double sill = mm(draw.real(0.5, 1.2));
+        const double h = mm(std::min(draw.real(0.6, 1.6), height - 0.3 - sill));
+        const double lo = a + end_margin, hi = b - end_margin - width;
+        if (hi < lo) continue;
+        const double s0 = mm(draw.real(lo, hi)), s1 = s0 + width;
+        bool clear = true;
+        for (const Hole& o : holes[e]) clear = clear && (s1 + 0.5 <= o.s0 || s0 >= o.s1 + 0.5);
+        if (!clear) continue;
+        holes[e].push_back({"window", s0, s1, sill, h});
+        const Vec2 p = room.polygon[e], dir = edge_direction(e), in = -outward(e);
+        const Vec2 q0 = p + dir * (s0 - 0.1), q1 = p + dir * (s1 + 0.1);
+        keep_out.push_back({q0, q1, q1 + in * 0.8, q0 + in * 0.8});
+        ++placed;
+      }
+    }
+  }
+  summary.push_back(std::to_string(doors.size()) + " doors, " + std::to_string(placed) +
+                    " windows");
+}
+
+// The inner walls on the splits' centre lines, run into the outer walls at the outline,
+// their doors cut in.
+void Generator::write_inner_walls() {
+  const double te = wall_thickness;
+  for (std::size_t k = 0; k < splits.size(); ++k) {
+    const Split& s = splits[k];
+    const double extent = s.along_x ? room.width : room.depth;
+    const double lo = s.lo < 1e-9 ? -0.5 * te : s.lo;
+    const double hi = s.hi > extent - 1e-9 ? extent + 0.5 * te : s.hi;
+    const Vec2 from = s.along_x ? Vec2(lo, s.at) : Vec2(s.at, lo);
+    const Vec2 to = s.along_x ? Vec2(hi, s.at) : Vec2(s.at, hi);
+    std::vector<const Door*> on;
+    for (const Door& door : doors)
+      if (door.split == k) on.push_back(&door);
+    std::sort(on.begin(), on.end(), [](const Door* a, const Door* b) { return a->s0 < b->s0; });
+    json w = {
+        {"from", xy(from)}, {"to", xy(to)}, {"thickness", mm(inner_thickness)}, {"z1", height}};
+    json openings = json::array();
+    for (const Door* door : on)
+      openings.push_back({{"kind", "door"},
+                          {"start", mm(door->s0 - lo)},
+                          {"width", mm(door->s1 - door->s0)},
+                          {"height", door->height}});
+    if (!openings.empty()) w["openings"] = openings;
+    walls.push_back(w);
+  }
+}
+
+json Generator::run_floor() {
+  const int drawn = draw.integer(3, 10);
+  const int rooms = rooms_asked ? rooms_asked : drawn;
+  height = mm(draw.real(2.5, 3.2));
+  wall_thickness = std::round(draw.real(0.2, 0.3) * 50.0) / 50.0;    // outer, whole 2 cm
+  inner_thickness = std::round(draw.real(0.1, 0.16) * 50.0) / 50.0;  // inner
+  robot_radius = mm(draw.real(0.25, 0.55));
+  scanner_height = mm(draw.real(1.0, 1.8));
+  passage = 2 * robot_radius + 0.3;
+  ceiling = !draw.chance(0.2);
+  // Each room at least 3 m across inside; shared walls long enough for the widest door
+  // with 0.3 m of wall either side.
+  const double min_side = 3.0 + inner_thickness;
+  const double min_shared = std::max(1.2, passage) + inner_thickness + 0.6;
+  bool laid_out = false;
+  for (int attempt = 0; attempt < 200 && !laid_out; ++attempt) {
+    summary.clear();
+    keep_out.clear();
+    const bool corridor = rooms >= 3 && draw.chance(0.5);
+    laid_out = (corridor ? corridor_layout(rooms, min_side) : partition_layout(rooms, min_side)) &&
+               make_doors(min_shared);
+  }
+  if (!laid_out)
+    throw std::logic_error("scene generator: no floor of " + std::to_string(rooms) +
+                           " rooms for seed " + std::to_string(seed));
+  summary.push_back(num(height, 2) + " m high" + (ceiling ? "" : ", no ceiling slab"));
+  const Outline outline = room;
+  std::vector<std::vector<Hole>> holes(4);
+  make_floor_windows(holes);
+  write_outline_walls(holes);
+  write_inner_walls();
+  make_outside_and_slabs();
+  // The start in a room drawn (not the corridor), before the furniture, kept free of it.
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < cells.size(); ++i)
+    if (!cells[i].corridor) order.push_back(i);
+  for (std::size_t i = order.size(); i > 1; --i)
+    std::swap(order[i - 1], order[std::size_t(draw.integer(0, int(i) - 1))]);
+  std::optional<json> robot;
+  for (std::size_t i = 0; i < order.size() && !robot; ++i) {
+    room = interior(cells[order[i]]);
+    robot = make_robot();
+  }
+  room = outline;
+  if (!robot)
+    throw std::logic_error("scene generator: no free start for seed " + std::to_string(seed));
+  // Furniture room by room; none in the corridor, which is a passage.
+  int along_walls = 0, free_standing = 0;
+  double diagonal = 0;
+  for (const Cell& c : cells) {
+    room = interior(c);
+    diagonal = std::max(diagonal, std::hypot(room.width, room.depth));
+    if (c.corridor) continue;
+    along_walls += make_wall_furniture();
+    free_standing += make_free_furniture();
+  }
+  room = outline;
+  if (along_walls)
+    summary.push_back(std::to_string(along_walls) + " benches and cabinets along the walls");
+  if (free_standing)
+    summary.push_back(std::to_string(free_standing) + " free-standing tables, poles, cabinets");
+  return scene_json(*robot, make_scanner(diagonal));
+}
+
 json Generator::run() {
+  if (kind == GeneratedKind::floor) return run_floor();
   make_outline();
   // The mezzanine before the openings (none cut into its slab), the obstacles after
   // them (none in their zones): columns, then the wall furniture, then the free one.
@@ -571,20 +922,26 @@ json Generator::run() {
   make_outside_and_slabs();
   make_columns();
   // The start before the furniture, kept free of it: a start always exists.
-  const json robot = make_robot();
-  make_wall_furniture();
-  make_free_furniture();
-  const json scanner = make_scanner();
+  const std::optional<json> robot = make_robot();
+  if (!robot)
+    throw std::logic_error("scene generator: no free start for seed " + std::to_string(seed));
+  if (const int placed = make_wall_furniture())
+    summary.push_back(std::to_string(placed) + " benches and cabinets along the walls");
+  if (const int placed = make_free_furniture())
+    summary.push_back(std::to_string(placed) + " free-standing tables, poles, cabinets" +
+                      (kind == GeneratedKind::hall ? ", machines" : ""));
+  return scene_json(*robot, make_scanner(std::hypot(room.width, room.depth)));
+}
+
+json Generator::scene_json(const json& robot, const json& scanner) const {
   std::ostringstream description;
   description << "Generated scene (seed " << seed << ", kind " << to_string(kind) << "): ";
   for (std::size_t i = 0; i < summary.size(); ++i) description << (i ? "; " : "") << summary[i];
   description << "; robot radius " << robot_radius << " m, scanner at " << scanner_height << " m.";
-  json scene = {{"format", "semioctree-scene"},
-                {"version", 1},
-                {"name", std::string("gen-") + to_string(kind) + "-" + std::to_string(seed)},
-                {"description", description.str()},
-                {"walls", walls},
-                {"slabs", slabs}};
+  std::string name = std::string("gen-") + to_string(kind) + "-" + std::to_string(seed);
+  if (rooms_asked) name += "-" + std::to_string(rooms_asked) + "-rooms";
+  json scene = {{"format", "semioctree-scene"},     {"version", 1},   {"name", name},
+                {"description", description.str()}, {"walls", walls}, {"slabs", slabs}};
   if (!boxes.empty()) scene["boxes"] = boxes;
   if (!cylinders.empty()) scene["cylinders"] = cylinders;
   scene["robot"] = robot;
@@ -599,8 +956,16 @@ GeneratedKind resolve_generated_kind(std::uint64_t seed, GeneratedKind kind) {
   return kind == GeneratedKind::any ? draw_kind(seed) : kind;
 }
 
-std::string generate_scene_json(std::uint64_t seed, GeneratedKind kind) {
-  Generator g(seed, resolve_generated_kind(seed, kind));
+std::string generate_scene_json(std::uint64_t seed, GeneratedKind kind, int rooms) {
+  const GeneratedKind k = resolve_generated_kind(seed, kind);
+  if (rooms != 0 && k != GeneratedKind::floor)
+    throw std::invalid_argument(std::string("a room count is for floors, not for kind ") +
+                                to_string(k));
+  if (rooms != 0 && (rooms < kMinFloorRooms || rooms > kMaxFloorRooms))
+    throw std::invalid_argument("a floor of " + std::to_string(rooms) + " rooms: expected " +
+                                std::to_string(kMinFloorRooms) + " to " +
+                                std::to_string(kMaxFloorRooms));
+  Generator g(seed, k, rooms);
   const json scene = g.run();
   // One line per key, and per element of the arrays of objects (walls, boxes, ...).
   std::string text = "{\n";
@@ -621,9 +986,9 @@ std::string generate_scene_json(std::uint64_t seed, GeneratedKind kind) {
   return text + "\n}\n";
 }
 
-Scene generate_scene(std::uint64_t seed, GeneratedKind kind) {
+Scene generate_scene(std::uint64_t seed, GeneratedKind kind, int rooms) {
   const GeneratedKind k = resolve_generated_kind(seed, kind);
-  return parse_scene_json(generate_scene_json(seed, k),
+  return parse_scene_json(generate_scene_json(seed, k, rooms),
                           std::string("generated-") + to_string(k) + "-" + std::to_string(seed),
                           ".");
 }

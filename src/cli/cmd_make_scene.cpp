@@ -1,4 +1,4 @@
-// `semioctree make-scene --seed N [--kind K] --out F.scene.json`: writes the generated
+// `semioctree make-scene --seed N [--kind K] [--rooms R] --out F.scene.json`: writes the generated
 // scene of a seed (sim/include/semioctree/sim/scene_generator.h) to a file.
 #include <cstdio>
 #include <filesystem>
@@ -19,6 +19,7 @@ namespace {
 struct MakeSceneOptions {
   std::uint64_t seed = 1;
   std::string kind = "any";
+  int rooms = 0;
   std::string out;
   bool force = false;
 };
@@ -33,7 +34,9 @@ void run_make_scene(const MakeSceneOptions& o) {
                                 " exists: it is not replaced (it may be a scene of your own); "
                                 "write elsewhere or add --force");
   const sim::GeneratedKind kind = sim::generated_kind_from_string(o.kind);
-  const std::string text = sim::generate_scene_json(o.seed, kind);
+  if (o.rooms != 0 && kind != sim::GeneratedKind::floor)
+    throw std::invalid_argument("--rooms is for --kind floor, not " + o.kind);
+  const std::string text = sim::generate_scene_json(o.seed, kind, o.rooms);
   // What is written is what the reader accepts: a generator bug is reported, not saved.
   const sim::Scene scene = sim::parse_scene_json(text, o.out, ".");
   const fs::path dir = fs::path(o.out).parent_path();
@@ -55,19 +58,25 @@ void add_make_scene_command(CLI::App& app) {
   auto o = std::make_shared<MakeSceneOptions>();
   auto* cmd = app.add_subcommand(
       "make-scene",
-      "Write a generated single-room scene (.scene.json, format version 1): a rectangular or "
-      "L-shaped room or a hall with columns and a mezzanine, 0-4 doors and 0-4 windows, "
-      "furniture, a robot and a scanner, all drawn from the seed; valid by construction "
-      "(docs/generated-scenes.md). The same seed and kind give the same file.");
+      "Write a generated scene (.scene.json, format version 1): a rectangular or L-shaped room "
+      "or a hall with columns and a mezzanine, 0-4 doors and 0-4 windows; or a floor of rooms "
+      "joined by doors (along a corridor, or cut from one rectangle); furniture, a robot and a "
+      "scanner; all drawn from the seed, valid by construction (docs/generated-scenes.md). "
+      "The same seed, kind and room count give the same file.");
   cmd->add_option("--seed", o->seed, "the scene's seed: any whole number from 0")
       ->required()
       ->check(seed_value());
   cmd->add_option("--kind", o->kind,
                   "room (rectangular, 4-14 m), l-shape (6-18 m, a corner cut off), hall (12-20 "
-                  "m, 4.5-6 m high, columns, a mezzanine, machines) or any (the kind drawn from "
-                  "the seed)")
+                  "m, 4.5-6 m high, columns, a mezzanine, machines), any (one of those three, "
+                  "drawn from the seed) or floor (3-10 rooms of 3-6 m joined by doors, the robot "
+                  "starting in one of them; its survey area is the whole floor)")
       ->check(CLI::IsMember(sim::generated_kind_names()))
       ->capture_default_str();
+  cmd->add_option("--rooms", o->rooms,
+                  "with --kind floor: the number of rooms, a corridor counting as one (2-16; "
+                  "default: drawn from the seed, 3-10)")
+      ->check(CLI::Range(sim::kMinFloorRooms, sim::kMaxFloorRooms));
   cmd->add_option("--out", o->out, "the scene file to write (e.g. gen-7.scene.json)")->required();
   cmd->add_flag("--force", o->force, "replace --out if it exists (refused without)");
   cmd->callback([o] { run_make_scene(*o); });

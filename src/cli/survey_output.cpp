@@ -37,6 +37,13 @@ json pose_json(const Eigen::Isometry3d& p) {
   return {{"x", t.x()}, {"y", t.y()}, {"z", t.z()}, {"yaw_deg", yaw_deg_of(p)}};
 }
 
+json route_json(const std::vector<Point3>& route) {
+  json out = json::array();
+  for (const Point3& p : route)
+    out.push_back({std::round(p.x * 1000.0) / 1000.0, std::round(p.y * 1000.0) / 1000.0});
+  return out;
+}
+
 json rooms_json(const std::vector<RoomStatus>& rooms) {
   json out = json::array();
   for (std::size_t i = 0; i < rooms.size(); ++i) {
@@ -214,6 +221,13 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
   slice.height = params_.robot.scanner_height;
   slice.scans = map.scanners();
   if (best) slice.nbv = best->position;
+  if (!s.route.empty()) routes_.push_back(s.route);
+  slice.routes = routes_;
+  for (std::size_t i = 0; i < s.rooms.size(); ++i) {
+    const Room& room = s.rooms[i].room;
+    slice.rooms.push_back(
+        {room.outline, room.inner, "R" + std::to_string(i) + " " + to_string(s.rooms[i].state)});
+  }
   for (const DetectedOpening& op : map.openings())
     slice.openings.push_back({op.kind == OpeningKind::kDoor,
                               Point3(op.corners[0].x(), op.corners[0].y(), op.corners[0].z()),
@@ -253,6 +267,7 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
   r["candidates_low_overlap"] = s.nbv.low_overlap;
   r["predicted_overlap"] = s.predicted_overlap ? json(*s.predicted_overlap) : json(nullptr);
   r["path_m"] = s.path_m ? json(*s.path_m) : json(nullptr);
+  r["route"] = route_json(s.route);
   if (best) {
     r["nbv"]["path_m"] = best->path_m;
     r["nbv"]["value"] = best->value;
@@ -323,8 +338,10 @@ void SurveyOutput::registration_failed(const RegistrationFailure& f) {
             {"position", {f.position.x, f.position.y}},
             {"error", f.error},
             {"retry", f.retry ? json{f.retry->x, f.retry->y} : json(nullptr)},
-            {"path_m", f.path_m ? json(*f.path_m) : json(nullptr)}};
+            {"path_m", f.path_m ? json(*f.path_m) : json(nullptr)},
+            {"route", route_json(f.route)}};
   failures_.push_back(r);
+  if (!f.route.empty()) routes_.push_back(f.route);
   if (f.retry)
     std::printf(
         "  registration failed: %s\n  the scan is dropped; scanning again at (%.3f, %.3f), "

@@ -40,6 +40,7 @@ class SurveyOutput : public SurveyObserver {
   SurveyParams params_;
   std::unique_ptr<CountProgress> progress_;  // one per NBV, while candidates are scored
   std::vector<nlohmann::json> records_;
+  std::vector<std::vector<Point3>> routes_;  // the robot's drives so far, for the slices
   nlohmann::json failures_ = nlohmann::json::array();
 };
 
@@ -49,6 +50,8 @@ nlohmann::json octants_json(const SemiOcTree& tree, nlohmann::json& volume_perce
 
 // x, y, z and heading of a scanner pose.
 nlohmann::json pose_json(const Eigen::Isometry3d& scanner_to_survey);
+// A route (ScanRecord::route) as [[x, y], ...], to the millimetre.
+nlohmann::json route_json(const std::vector<Point3>& route);
 // A floor's rooms (ScanRecord::rooms): id, state, area, bounds, openings, scans, Eq 5, path.
 nlohmann::json rooms_json(const std::vector<RoomStatus>& rooms);
 

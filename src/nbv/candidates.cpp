@@ -205,12 +205,18 @@ std::vector<std::uint8_t> clear_cells(const std::vector<std::uint8_t>& obstacle,
 // cells (the robot's own cell always counts), in cells: steps to the 8 neighbours, a
 // diagonal one only when both cells beside it are clear (the robot does not cut a
 // corner), so the cells reached are those 4-connected to the robot's. Infinity for the
-// others, and everywhere when the robot stands outside the map.
+// others, and everywhere when the robot stands outside the map. `routes` (if given) gets
+// each cell's previous one.
 std::vector<float> path_lengths(const SemiOcTree& tree, const Plane& plane,
                                 const Point3& robot_position,
-                                const std::vector<std::uint8_t>& clear, CandidateReport& rep) {
+                                const std::vector<std::uint8_t>& clear, CandidateReport& rep,
+                                RouteTree* routes) {
   constexpr float kNone = std::numeric_limits<float>::infinity();
   std::vector<float> dist(clear.size(), kNone);
+  if (routes) {
+    *routes = RouteTree{tree.leaf_size(), plane.x0, plane.y0, plane.nx, plane.ny, -1, {}};
+    routes->previous.assign(clear.size(), -1);
+  }
   octomap::OcTreeKey rk;
   if (!tree.key_of(robot_position, rk)) return dist;
   const std::int64_t rx = leaf_cell(rk.k[0]) - plane.x0;
@@ -220,6 +226,7 @@ std::vector<float> path_lengths(const SemiOcTree& tree, const Plane& plane,
   using Item = std::pair<float, std::size_t>;
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
   const std::size_t start = plane.index(int(rx), int(ry));
+  if (routes) routes->start = std::int64_t(start);
   dist[start] = 0;
   queue.push({0.0f, start});
   const auto nx = std::ptrdiff_t(plane.nx);
@@ -233,6 +240,7 @@ std::vector<float> path_lengths(const SemiOcTree& tree, const Plane& plane,
       const std::size_t j = std::size_t(std::ptrdiff_t(i) + offset);
       if (!clear[j] || d + length >= dist[j]) return;
       dist[j] = d + length;
+      if (routes) routes->previous[j] = std::int32_t(i);
       queue.push({dist[j], j});
     };
     // The border cells are never clear: no neighbour lies off the plane.
@@ -248,6 +256,26 @@ std::vector<float> path_lengths(const SemiOcTree& tree, const Plane& plane,
 }
 
 }  // namespace
+
+std::vector<Point3> RouteTree::route_to(const Point3& to) const {
+  std::vector<Point3> route;
+  const std::int64_t x = std::int64_t(std::floor(to.x / leaf)) - x0;
+  const std::int64_t y = std::int64_t(std::floor(to.y / leaf)) - y0;
+  if (start < 0 || x < 0 || y < 0 || x >= nx || y >= ny) return route;
+  std::int64_t i = y * nx + x;
+  if (i != start && previous[std::size_t(i)] < 0) return route;
+  std::vector<std::int64_t> cells{i};
+  while (i != start) cells.push_back(i = previous[std::size_t(i)]);
+  std::reverse(cells.begin(), cells.end());
+  const auto centre = [&](std::int64_t c) {
+    return Point3((double(c % nx + x0) + 0.5) * leaf, (double(c / nx + y0) + 0.5) * leaf, to.z);
+  };
+  // Only the cells where the step changes: the start, the turns, the end.
+  for (std::size_t k = 0; k < cells.size(); ++k)
+    if (k == 0 || k + 1 == cells.size() || cells[k] - cells[k - 1] != cells[k + 1] - cells[k])
+      route.push_back(centre(cells[k]));
+  return route;
+}
 
 double floor_layer_clearance(const RobotGeometry& robot, double leaf_size) {
   if (!(robot.ground_clearance > 0)) return 0.0;  // no clearance: the floor layer counts too
@@ -265,10 +293,12 @@ PlatformBody platform_body(const RobotGeometry& robot, double leaf_size) {
 std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry& robot,
                                     const Point3& robot_position,
                                     const std::vector<Point3>& past_scans, const NbvParams& params,
-                                    CandidateReport* report, std::vector<double>* path_m) {
+                                    CandidateReport* report, std::vector<double>* path_m,
+                                    RouteTree* routes) {
   CandidateReport rep;
   std::vector<Point3> out;
   if (path_m) path_m->clear();
+  if (routes) *routes = RouteTree{};
   if (report) *report = rep;
   if (tree.coarse_count() == 0) return out;
   if (!(robot.radius >= 0) || !(robot.scanner_height > 0) || !(robot.top() > 0))
@@ -279,7 +309,7 @@ std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry&
   const std::vector<std::uint8_t> obstacle =
       obstacle_columns(tree, plane, robot, past_scans, params, rep);
   const std::vector<std::uint8_t> clear = clear_cells(obstacle, plane, robot.radius, r);
-  const std::vector<float> path = path_lengths(tree, plane, robot_position, clear, rep);
+  const std::vector<float> path = path_lengths(tree, plane, robot_position, clear, rep, routes);
 
   // The candidate grid: every m-th leaf cell (world-aligned), at its centre.
   const std::int64_t m = std::max<std::int64_t>(1, std::llround(params.candidate_spacing / r));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "label_roles.h"
 #include "plane_grid.h"
@@ -48,6 +49,61 @@ void close_openings(std::vector<std::uint8_t>& room_cell, const Plane& plane, do
         room_cell[plane.index(int(x), int(y))] = 0;
     }
   }
+}
+
+// Each room's outline: its cells' edges facing a cell of another room or none, joined
+// along rows (edges below and above) and columns (edges left and right). The plane's
+// border cells belong to no room, so every neighbour looked at lies on the plane.
+void trace_outlines(std::vector<Room>& rooms, const std::vector<std::int32_t>& room_of,
+                    const Plane& plane, double r) {
+  const auto at = [&](int x, int y) { return room_of[plane.index(x, y)]; };
+  const auto metres = [r](std::int64_t cell) { return float(double(cell) * r); };
+  for (const int side : {-1, 1}) {
+    // Rows: edges below (side -1) and above (+1) each run of cells.
+    for (int y = 1; y + 1 < plane.ny; ++y)
+      for (int x = 1; x + 1 < plane.nx;) {
+        const std::int32_t id = at(x, y);
+        if (id < 0 || at(x, y + side) == id) {
+          ++x;
+          continue;
+        }
+        const int start = x;
+        while (x + 1 < plane.nx && at(x, y) == id && at(x, y + side) != id) ++x;
+        const float ey = metres(y + plane.y0 + (side > 0 ? 1 : 0));
+        rooms[std::size_t(id)].outline.push_back(
+            {metres(start + plane.x0), ey, metres(x + plane.x0), ey});
+      }
+    // Columns: edges left (-1) and right (+1) of each run of cells.
+    for (int x = 1; x + 1 < plane.nx; ++x)
+      for (int y = 1; y + 1 < plane.ny;) {
+        const std::int32_t id = at(x, y);
+        if (id < 0 || at(x + side, y) == id) {
+          ++y;
+          continue;
+        }
+        const int start = y;
+        while (y + 1 < plane.ny && at(x, y) == id && at(x + side, y) != id) ++y;
+        const float ex = metres(x + plane.x0 + (side > 0 ? 1 : 0));
+        rooms[std::size_t(id)].outline.push_back(
+            {ex, metres(start + plane.y0), ex, metres(y + plane.y0)});
+      }
+  }
+}
+
+// Each room's cell nearest the centre of its bounds.
+void find_inner_points(std::vector<Room>& rooms, const std::vector<std::int32_t>& room_of,
+                       const Plane& plane, double r) {
+  std::vector<double> best(rooms.size(), std::numeric_limits<double>::infinity());
+  for (int y = 0; y < plane.ny; ++y)
+    for (int x = 0; x < plane.nx; ++x) {
+      const std::int32_t id = room_of[plane.index(x, y)];
+      if (id < 0) continue;
+      Room& room = rooms[std::size_t(id)];
+      const Point3 c((double(x + plane.x0) + 0.5) * r, (double(y + plane.y0) + 0.5) * r, 0.0);
+      const double d =
+          std::hypot(c.x - 0.5 * (room.min.x + room.max.x), c.y - 0.5 * (room.min.y + room.max.y));
+      if (d < best[std::size_t(id)]) best[std::size_t(id)] = d, room.inner = c;
+    }
 }
 
 }  // namespace
@@ -123,6 +179,8 @@ RoomMap segment_rooms(const SemiOcTree& tree, double height, double floor_z, dou
       room.area_m2 = double(room.cells) * r * r;
       m.rooms_.push_back(room);
     }
+  trace_outlines(m.rooms_, m.room_of_, plane, r);
+  find_inner_points(m.rooms_, m.room_of_, plane, r);
 
   const int steps = int(std::ceil(kOpeningReach / r));
   for (std::size_t i = 0; i < openings.size(); ++i) {

@@ -43,6 +43,20 @@ double floor_layer_clearance(const RobotGeometry& robot, double leaf_size);
 // cylinder from the floor-layer clearance up to its top.
 PlatformBody platform_body(const RobotGeometry& robot, double leaf_size);
 
+// The robot's shortest paths as find_candidates searched them, to trace its route to a
+// position: the plane of leaf cells, each cell's previous one on its path.
+struct RouteTree {
+  double leaf = 0;
+  std::int64_t x0 = 0, y0 = 0;  // cell (x, y) is leaf column (x + x0, y + y0)
+  int nx = 0, ny = 0;
+  std::int64_t start = -1;             // the robot's cell; -1: the robot is off the map
+  std::vector<std::int32_t> previous;  // per cell; -1 at the start and where not reached
+
+  // The route to `to` (x, y): the centres of the cells where it turns, the robot's cell
+  // first and `to`'s last (z = to.z); empty if `to`'s cell was not reached.
+  std::vector<Point3> route_to(const Point3& to) const;
+};
+
 // Feasible candidate positions (scanner positions, z = scanner height), in grid
 // order (y, then x), then the feasible doorways (at their leaf cell's centre), on space seen free
 // (and, with stand_beyond_openings, seen through an opening) where may_stand allows.
@@ -52,12 +66,14 @@ PlatformBody platform_body(const RobotGeometry& robot, double leaf_size);
 // Uses candidate_spacing, grid_anchor, limits, blind_zone_is_free, may_stand, stand_beyond_openings
 // and doorways of `params`. `path_m` (if given) gets each candidate's shortest path from the robot
 // over the cells its safety cylinder clears, m: steps between leaf cells, diagonal ones only where
-// the robot does not cut a corner (docs/nbv.md, "Path"). Throws std::invalid_argument for a radius
-// < 0 or a scanner height <= 0, or a grid anchor beyond the key range.
+// the robot does not cut a corner (docs/nbv.md, "Path"); `routes` (if given) the paths
+// themselves. Throws std::invalid_argument for a radius < 0 or a scanner height <= 0, or a
+// grid anchor beyond the key range.
 std::vector<Point3> find_candidates(const SemiOcTree& tree, const RobotGeometry& robot,
                                     const Point3& robot_position,
                                     const std::vector<Point3>& past_scans, const NbvParams& params,
                                     CandidateReport* report = nullptr,
-                                    std::vector<double>* path_m = nullptr);
+                                    std::vector<double>* path_m = nullptr,
+                                    RouteTree* routes = nullptr);
 
 }  // namespace semioctree

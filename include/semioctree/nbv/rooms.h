@@ -2,6 +2,7 @@
 // regions by walls and by the doors and windows found in them (docs/nbv.md, "Rooms").
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -18,6 +19,10 @@ struct Room {
   double area_m2 = 0;                 // cells × leaf²
   Point3 min, max;                    // its cells' bounds (x, y); z: the floor and ceiling given
   std::vector<std::size_t> openings;  // openings (indices into those given) on its border
+  // Its border on the plane: the edges between its cells and the others, each a segment
+  // (x0, y0, x1, y1 in metres) joined along its row or column of cells.
+  std::vector<std::array<float, 4>> outline;
+  Point3 inner;  // the centre of its cell nearest the centre of its bounds (z: 0)
 };
 
 // An opening and the rooms on its two sides (none: no room within reach there, e.g.
