@@ -383,6 +383,18 @@ RoomBox beyond_door(const DetectedOpening& door, int side, double reach, double 
 
 }  // namespace
 
+DoorwayView doorway_view(const DetectedOpening& door, int side, const Eigen::Vector3d& at) {
+  const Eigen::Vector3d d = at - door.centre();
+  const double across = d.dot(door.wall_normal) * double(side);  // > 0: on the side looked into
+  const Eigen::Vector3d along_wall = door.wall_normal.cross(Eigen::Vector3d::UnitZ());
+  const double along = d.dot(along_wall) * double(side);
+  const double reach = std::hypot(across, along);
+  if (reach < door.width / 2) return DoorwayView::kInOpening;
+  if (across > 0) return DoorwayView::kBeyond;
+  if (std::abs(along) <= std::sin(10.0 * M_PI / 180.0) * reach) return DoorwayView::kStraight;
+  return along > 0 ? DoorwayView::kFromOneSide : DoorwayView::kFromTheOther;
+}
+
 std::vector<Eigen::Vector3d> Survey::doorway_positions(const DetectedOpening& door) const {
   const double r = map_.tree().leaf_size();
   const Eigen::Vector3d c = door.centre();
@@ -390,12 +402,33 @@ std::vector<Eigen::Vector3d> Survey::doorway_positions(const DetectedOpening& do
   // clears the wall's face (the opening's corners lie on one face) and the scanner,
   // looking down no steeper than its lowest elevation, sees the floor just beyond the
   // opening, which the robot must have seen to drive through.
-  double off = params_.robot.radius + r;
+  const double near = params_.robot.radius + r;
+  double off = near;
   const double lowest = params_.nbv.limits.elevation_min_deg;
   if (lowest < 0 && lowest > -90)
     off = std::max(off, params_.robot.scanner_height / std::tan(-lowest * M_PI / 180.0) + r);
   const Eigen::Vector3d ahead = off * door.wall_normal;
-  return {c, c + ahead, c - ahead};
+  std::vector<Eigen::Vector3d> out{c, c + ahead, c - ahead};
+  if (off > near) {
+    // Where the space in front of the door is shallower than that (a corridor narrower
+    // than the distance): nearer, straight in front (the floor beyond is seen from a little
+    // past the opening on), and at the full distance obliquely (the floor just beyond the
+    // opening is seen, through it at an angle, on one side).
+    for (const double share : {0.8, 0.6})
+      if (share * off > near) {
+        out.push_back(c + share * ahead);
+        out.push_back(c - share * ahead);
+      }
+    const Eigen::Vector3d along = door.wall_normal.cross(Eigen::Vector3d::UnitZ()).normalized();
+    for (const double deg : {20.0, 40.0, 60.0})
+      for (const double turn : {-1.0, 1.0}) {
+        const double a = turn * deg * M_PI / 180.0;
+        const Eigen::Vector3d slant = std::cos(a) * door.wall_normal + std::sin(a) * along;
+        out.push_back(c + off * slant);
+        out.push_back(c - off * slant);
+      }
+  }
+  return out;
 }
 
 void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& robot) {
@@ -530,34 +563,54 @@ void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& rob
     complete_rooms_.push_back(in_room[i].front().position);
   }
   // Then the doors with a side where the robot cannot stand yet (nothing seen there, or
-  // too little): a linking scan from the doorway, which sees both sides, nearest first,
-  // judged by what it sees beyond the door. A door looked through once is explored.
+  // too little): a linking scan from a doorway position, which sees both sides, nearest
+  // first, judged by what it sees beyond the door. A door side is looked through again
+  // while the robot still cannot stand beyond it, once from each kind of doorway position
+  // (DoorwayView): scans from either side of the door's normal together see the floor
+  // just beyond the opening where neither alone does, and then the opening can be stood in.
   auto unexplored = [&](const std::optional<std::size_t>& room) {
     return !room || !status_of[*room] || in_room[*status_of[*room]].empty();
   };
   struct DoorwayPlan {
     std::size_t door;
     int side;  // the unexplored side, along the door's wall normal
+    DoorwayView view;
     const NbvCandidate* doorway;
+  };
+  const auto looked = [&](const Eigen::Vector3d& c, int side, DoorwayView view) {
+    return std::any_of(doorway_scans_.begin(), doorway_scans_.end(), [&](const DoorwayScan& d) {
+      return d.side == side && d.view == view &&
+             std::hypot(d.door.x - c.x(), d.door.y - c.y()) < 2 * r;
+    });
   };
   std::vector<DoorwayPlan> plans;
   for (const OpeningLink& link : rooms.links()) {
     const DetectedOpening& o = openings[link.opening];
     if (o.kind != OpeningKind::kDoor) continue;
     const Eigen::Vector3d c = o.centre();
-    if (std::any_of(doors_looked_through_.begin(), doors_looked_through_.end(),
-                    [&](const Point3& d) { return std::hypot(d.x - c.x(), d.y - c.y()) < 2 * r; }))
-      continue;
     for (const int side : {1, -1}) {
       if (!unexplored(side > 0 ? link.front : link.back)) continue;
       // Where the robot would stand first beyond the door: inside the survey area?
       const Eigen::Vector3d beyond =
           c + double(side) * (params_.robot.radius + 2 * r) * o.wall_normal;
       if (params_.may_stand && !params_.may_stand(Point3(beyond.x(), beyond.y(), height))) continue;
-      for (const Eigen::Vector3d& p : doorway_positions(o))
+      // Of each kind, the position farthest from the wall the robot can stand at: it sees
+      // through the opening most squarely, and the floor beyond from nearest the opening.
+      std::map<DoorwayView, std::pair<double, const NbvCandidate*>> farthest;
+      for (const Eigen::Vector3d& p : doorway_positions(o)) {
+        const DoorwayView view = doorway_view(o, side, p);
+        if (looked(c, side, view)) continue;
+        const double depth = std::abs((p - c).dot(o.wall_normal));
         for (const NbvCandidate& cand : all)
-          if (std::hypot(cand.position.x - p.x(), cand.position.y - p.y()) < r)
-            plans.push_back({link.opening, side, &cand});
+          if (std::hypot(cand.position.x - p.x(), cand.position.y - p.y()) < r) {
+            auto [at, added] = farthest.try_emplace(view, depth, &cand);
+            if (!added && (depth > at->second.first ||
+                           (depth == at->second.first && cand.path_m < at->second.second->path_m)))
+              at->second = {depth, &cand};
+          }
+      }
+      for (const auto& [view, best] : farthest)
+        plans.push_back({link.opening, side, view, best.second});
     }
   }
   std::stable_sort(plans.begin(), plans.end(), [](const DoorwayPlan& a, const DoorwayPlan& b) {
@@ -569,9 +622,8 @@ void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& rob
     beyond.see_through_doors = true;
     NbvResult res = best_view_among(tree, {*plan.doorway}, beyond);
     if (!res.best || res.best->score <= 0) continue;
-    const DetectedOpening& o = openings[plan.door];
-    const Eigen::Vector3d c = o.centre();
-    doors_looked_through_.push_back(Point3(c.x(), c.y(), height));
+    const Eigen::Vector3d c = openings[plan.door].centre();
+    doorway_scans_.push_back({Point3(c.x(), c.y(), height), plan.side, plan.view});
     rec.planned_doorway = plan.door;
     rec.room = beyond.room;
     return finish(std::move(res), std::nullopt);

@@ -493,6 +493,29 @@ TEST(SurveyStage, AFloorSurveyGoesThroughTheDoorAndCompletesBothRooms) {
   EXPECT_GT(outcome.path_m, 0.0);
 }
 
+// Doorway positions by where they look through a door from: a door in the wall x = 4
+// (normal +x), 1 m wide, looked into on its +x side.
+TEST(SurveyStage, DoorwayViewsTellWhereTheyLookThroughTheDoorFrom) {
+  DetectedOpening door;
+  door.kind = OpeningKind::kDoor;
+  door.corners = {Eigen::Vector3d(4, 1, 0), Eigen::Vector3d(4, 2, 0), Eigen::Vector3d(4, 2, 2),
+                  Eigen::Vector3d(4, 1, 2)};
+  door.width = 1.0, door.height = 2.0;
+  door.wall_normal = Eigen::Vector3d::UnitX();
+  const auto view = [&](double x, double y, int side = 1) {
+    return doorway_view(door, side, Eigen::Vector3d(x, y, 1.5));
+  };
+  EXPECT_EQ(view(4.1, 1.6), DoorwayView::kInOpening);
+  EXPECT_EQ(view(5.5, 1.5), DoorwayView::kBeyond);
+  EXPECT_EQ(view(2.0, 1.6), DoorwayView::kStraight);  // 5.7° off the normal
+  EXPECT_EQ(view(2.5, 0.5), DoorwayView::kFromOneSide);
+  EXPECT_EQ(view(2.5, 2.5), DoorwayView::kFromTheOther);
+  // Looked into the other way, the sides swap and what was beyond is in front.
+  EXPECT_EQ(view(2.5, 2.5, -1), DoorwayView::kBeyond);
+  EXPECT_EQ(view(5.5, 0.5, -1), DoorwayView::kFromTheOther);
+  EXPECT_EQ(view(5.5, 1.5, -1), DoorwayView::kStraight);
+}
+
 // The room scope, and the floor scope with a survey area of the west room, stay in the
 // west room; the east room is then reported as outside the survey area.
 TEST(SurveyStage, ARoomScopeOrASurveyAreaKeepsTheRobotInItsRoom) {

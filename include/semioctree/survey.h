@@ -253,6 +253,13 @@ struct SurveyOutcome {
   double path_m = 0;  // the robot's path over the survey (to failed scans and retries too)
 };
 
+// Where a doorway position (Survey::doorway_positions) stands for a look through `door`
+// into its side `side` (±1 along its wall normal): within half the door's width of its
+// centre (in the opening); on the side looked into; within 10° of its normal on the near
+// side; or off the normal to one side or the other (along the wall, seen from `side`).
+enum class DoorwayView { kInOpening, kBeyond, kStraight, kFromOneSide, kFromTheOther };
+DoorwayView doorway_view(const DetectedOpening& door, int side, const Eigen::Vector3d& at);
+
 // A stop on the robot's way (Survey::waypoint_toward).
 struct Waypoint {
   Point3 position;    // a position the robot can stand at (scanner height)
@@ -317,7 +324,8 @@ class Survey {
   void plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& robot);
 
   // Where a linking scan may stand at `door`: in the opening, and in front of it on
-  // either side (NbvParams::doorways).
+  // either side where the scanner sees the floor just beyond the opening: straight in
+  // front, and up to 60° off the wall's normal (NbvParams::doorways).
   std::vector<Eigen::Vector3d> doorway_positions(const DetectedOpening& door) const;
 
   // The overlap a scan at `position` is predicted to have with the map (as the NBV's
@@ -338,8 +346,14 @@ class Survey {
   std::vector<ScanRecord> records_;
   // kFloor: points inside the rooms found complete (a room holding one stays complete).
   std::vector<Point3> complete_rooms_;
-  // kFloor: centres of the doors a doorway scan was planned at (not planned at again).
-  std::vector<Point3> doors_looked_through_;
+  // kFloor: the doorway scans planned: the door's centre, the side looked into, and from
+  // where (each door side is looked through once from each kind of position).
+  struct DoorwayScan {
+    Point3 door;
+    int side = 1;
+    DoorwayView view = DoorwayView::kStraight;
+  };
+  std::vector<DoorwayScan> doorway_scans_;
 };
 
 // Heading of a pose (its x axis in the horizontal plane), degrees.
