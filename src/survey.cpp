@@ -431,6 +431,81 @@ std::vector<Eigen::Vector3d> Survey::doorway_positions(const DetectedOpening& do
   return out;
 }
 
+std::optional<Survey::DoorwayChoice> Survey::plan_doorway_scan(
+    const RoomMap& rooms, const std::vector<std::optional<std::size_t>>& status_of,
+    const std::vector<std::vector<NbvCandidate>>& in_room, const std::vector<NbvCandidate>& all,
+    const NbvParams& nbv) {
+  const SemiOcTree& tree = map_.tree();
+  const double height = params_.robot.scanner_height, top = map_.ceiling_height();
+  const double r = tree.leaf_size();
+  const std::vector<DetectedOpening>& openings = map_.openings();
+  // Doors with a side where the robot cannot stand yet (nothing seen there, or too
+  // little): a linking scan from a doorway position, which sees both sides, nearest
+  // first, judged by what it sees beyond the door. A door side is looked through again
+  // while the robot still cannot stand beyond it, once from each kind of doorway position
+  // (DoorwayView): scans from either side of the door's normal together see the floor
+  // just beyond the opening where neither alone does, and then the opening can be stood in.
+  auto unexplored = [&](const std::optional<std::size_t>& room) {
+    return !room || !status_of[*room] || in_room[*status_of[*room]].empty();
+  };
+  struct DoorwayPlan {
+    std::size_t door;
+    int side;  // the unexplored side, along the door's wall normal
+    DoorwayView view;
+    const NbvCandidate* doorway;
+  };
+  const auto looked = [&](const Eigen::Vector3d& c, int side, DoorwayView view) {
+    return std::any_of(doorway_scans_.begin(), doorway_scans_.end(), [&](const DoorwayScan& d) {
+      return d.side == side && d.view == view &&
+             std::hypot(d.door.x - c.x(), d.door.y - c.y()) < 2 * r;
+    });
+  };
+  std::vector<DoorwayPlan> plans;
+  for (const OpeningLink& link : rooms.links()) {
+    const DetectedOpening& o = openings[link.opening];
+    if (o.kind != OpeningKind::kDoor) continue;
+    const Eigen::Vector3d c = o.centre();
+    for (const int side : {1, -1}) {
+      if (!unexplored(side > 0 ? link.front : link.back)) continue;
+      // Where the robot would stand first beyond the door: inside the survey area?
+      const Eigen::Vector3d beyond =
+          c + double(side) * (params_.robot.radius + 2 * r) * o.wall_normal;
+      if (params_.may_stand && !params_.may_stand(Point3(beyond.x(), beyond.y(), height))) continue;
+      // Of each kind, the position farthest from the wall the robot can stand at: it sees
+      // through the opening most squarely, and the floor beyond from nearest the opening.
+      std::map<DoorwayView, std::pair<double, const NbvCandidate*>> farthest;
+      for (const Eigen::Vector3d& p : doorway_positions(o)) {
+        const DoorwayView view = doorway_view(o, side, p);
+        if (looked(c, side, view)) continue;
+        const double depth = std::abs((p - c).dot(o.wall_normal));
+        for (const NbvCandidate& cand : all)
+          if (std::hypot(cand.position.x - p.x(), cand.position.y - p.y()) < r) {
+            auto [at, added] = farthest.try_emplace(view, depth, &cand);
+            if (!added && (depth > at->second.first ||
+                           (depth == at->second.first && cand.path_m < at->second.second->path_m)))
+              at->second = {depth, &cand};
+          }
+      }
+      for (const auto& [view, best] : farthest)
+        plans.push_back({link.opening, side, view, best.second});
+    }
+  }
+  std::stable_sort(plans.begin(), plans.end(), [](const DoorwayPlan& a, const DoorwayPlan& b) {
+    return a.doorway->path_m < b.doorway->path_m;
+  });
+  for (const DoorwayPlan& plan : plans) {
+    NbvParams beyond = nbv;
+    beyond.room = beyond_door(openings[plan.door], plan.side, nbv.limits.max_range, top);
+    beyond.see_through_doors = true;
+    NbvResult res = best_view_among(tree, {*plan.doorway}, beyond);
+    if (!res.best || res.best->score <= 0) continue;
+    const Eigen::Vector3d c = openings[plan.door].centre();
+    doorway_scans_.push_back({Point3(c.x(), c.y(), height), plan.side, plan.view});
+    return DoorwayChoice{std::move(res), plan.door, *beyond.room};
+  }
+  return std::nullopt;
+}
+
 void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& robot) {
   const SemiOcTree& tree = map_.tree();
   const double height = params_.robot.scanner_height, top = map_.ceiling_height();
@@ -562,71 +637,11 @@ void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& rob
     st.state = RoomState::kComplete;
     complete_rooms_.push_back(in_room[i].front().position);
   }
-  // Then the doors with a side where the robot cannot stand yet (nothing seen there, or
-  // too little): a linking scan from a doorway position, which sees both sides, nearest
-  // first, judged by what it sees beyond the door. A door side is looked through again
-  // while the robot still cannot stand beyond it, once from each kind of doorway position
-  // (DoorwayView): scans from either side of the door's normal together see the floor
-  // just beyond the opening where neither alone does, and then the opening can be stood in.
-  auto unexplored = [&](const std::optional<std::size_t>& room) {
-    return !room || !status_of[*room] || in_room[*status_of[*room]].empty();
-  };
-  struct DoorwayPlan {
-    std::size_t door;
-    int side;  // the unexplored side, along the door's wall normal
-    DoorwayView view;
-    const NbvCandidate* doorway;
-  };
-  const auto looked = [&](const Eigen::Vector3d& c, int side, DoorwayView view) {
-    return std::any_of(doorway_scans_.begin(), doorway_scans_.end(), [&](const DoorwayScan& d) {
-      return d.side == side && d.view == view &&
-             std::hypot(d.door.x - c.x(), d.door.y - c.y()) < 2 * r;
-    });
-  };
-  std::vector<DoorwayPlan> plans;
-  for (const OpeningLink& link : rooms.links()) {
-    const DetectedOpening& o = openings[link.opening];
-    if (o.kind != OpeningKind::kDoor) continue;
-    const Eigen::Vector3d c = o.centre();
-    for (const int side : {1, -1}) {
-      if (!unexplored(side > 0 ? link.front : link.back)) continue;
-      // Where the robot would stand first beyond the door: inside the survey area?
-      const Eigen::Vector3d beyond =
-          c + double(side) * (params_.robot.radius + 2 * r) * o.wall_normal;
-      if (params_.may_stand && !params_.may_stand(Point3(beyond.x(), beyond.y(), height))) continue;
-      // Of each kind, the position farthest from the wall the robot can stand at: it sees
-      // through the opening most squarely, and the floor beyond from nearest the opening.
-      std::map<DoorwayView, std::pair<double, const NbvCandidate*>> farthest;
-      for (const Eigen::Vector3d& p : doorway_positions(o)) {
-        const DoorwayView view = doorway_view(o, side, p);
-        if (looked(c, side, view)) continue;
-        const double depth = std::abs((p - c).dot(o.wall_normal));
-        for (const NbvCandidate& cand : all)
-          if (std::hypot(cand.position.x - p.x(), cand.position.y - p.y()) < r) {
-            auto [at, added] = farthest.try_emplace(view, depth, &cand);
-            if (!added && (depth > at->second.first ||
-                           (depth == at->second.first && cand.path_m < at->second.second->path_m)))
-              at->second = {depth, &cand};
-          }
-      }
-      for (const auto& [view, best] : farthest)
-        plans.push_back({link.opening, side, view, best.second});
-    }
-  }
-  std::stable_sort(plans.begin(), plans.end(), [](const DoorwayPlan& a, const DoorwayPlan& b) {
-    return a.doorway->path_m < b.doorway->path_m;
-  });
-  for (const DoorwayPlan& plan : plans) {
-    NbvParams beyond = nbv;
-    beyond.room = beyond_door(openings[plan.door], plan.side, nbv.limits.max_range, top);
-    beyond.see_through_doors = true;
-    NbvResult res = best_view_among(tree, {*plan.doorway}, beyond);
-    if (!res.best || res.best->score <= 0) continue;
-    const Eigen::Vector3d c = openings[plan.door].centre();
-    doorway_scans_.push_back({Point3(c.x(), c.y(), height), plan.side, plan.view});
-    rec.planned_doorway = plan.door;
-    rec.room = beyond.room;
-    return finish(std::move(res), std::nullopt);
+  // Then the doors with a side where the robot cannot stand yet.
+  if (std::optional<DoorwayChoice> look = plan_doorway_scan(rooms, status_of, in_room, all, nbv)) {
+    rec.planned_doorway = look->door;
+    rec.room = look->beyond;
+    return finish(std::move(look->nbv), std::nullopt);
   }
   // Every room the robot can reach is complete: the robot's room's result ends the survey.
   rec.scope_complete = current.best.has_value();

@@ -323,6 +323,22 @@ class Survey {
   // rec.room and rec.nbv (docs/data-flow.md, "Scope").
   void plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& robot);
 
+  // A doorway scan planned (step 3 of plan_floor): its NBV result, the door looked
+  // through (an index into the map's openings) and what lies beyond it.
+  struct DoorwayChoice {
+    NbvResult nbv;
+    std::size_t door = 0;
+    RoomBox beyond;
+  };
+  // The nearest doorway scan that looks through a door into a side the robot cannot stand
+  // in yet (docs/nbv.md, "Looking through a door again"); `rooms`, the index of each of
+  // its rooms in the record's rooms (`status_of`), the candidates in each of those and
+  // all candidates as plan_floor found them. Records the doorway scan planned.
+  std::optional<DoorwayChoice> plan_doorway_scan(
+      const RoomMap& rooms, const std::vector<std::optional<std::size_t>>& status_of,
+      const std::vector<std::vector<NbvCandidate>>& in_room, const std::vector<NbvCandidate>& all,
+      const NbvParams& nbv);
+
   // Where a linking scan may stand at `door`: in the opening, and in front of it on
   // either side where the scanner sees the floor just beyond the opening: straight in
   // front, and up to 60° off the wall's normal (NbvParams::doorways).
