@@ -569,14 +569,26 @@ void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& rob
     return RoomBox{Point3(st.room.min.x - r, st.room.min.y - r, 0.0),
                    Point3(st.room.max.x + r, st.room.max.y + r, top)};
   };
-  // What is known before judging: rooms found complete stay so; a room without a
+  // What is known before judging: rooms found complete stay so while they are the same
+  // room (bounds within the robot's radius and a leaf of the room found complete: not
+  // joined to space seen since, nor split by a door found since); a room without a
   // candidate cannot be stood in.
+  const double same_within = params_.robot.radius + r;
+  const auto complete_at = [](const Point3& at, const RoomStatus& st) {
+    return CompleteRoom{at, st.room.min, st.room.max};
+  };
+  const auto same = [&](const CompleteRoom& c, const RoomStatus& st) {
+    return std::abs(c.min.x - st.room.min.x) <= same_within &&
+           std::abs(c.min.y - st.room.min.y) <= same_within &&
+           std::abs(c.max.x - st.room.max.x) <= same_within &&
+           std::abs(c.max.y - st.room.max.y) <= same_within;
+  };
   for (std::size_t i = 0; i < rec.rooms.size(); ++i) {
     RoomStatus& st = rec.rooms[i];
     for (const NbvCandidate& c : in_room[i])
       st.path_m = st.path_m ? std::min(*st.path_m, c.path_m) : c.path_m;
     if (std::any_of(complete_rooms_.begin(), complete_rooms_.end(),
-                    [&](const Point3& p) { return status_near(p) == i; })) {
+                    [&](const CompleteRoom& c) { return status_near(c.at) == i && same(c, st); })) {
       st.state = RoomState::kComplete;
     } else if (in_room[i].empty() && i != rec.in_room) {
       st.state = RoomState::kUnreachable;
@@ -614,7 +626,8 @@ void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& rob
     st.state = open_here ? RoomState::kOpen : RoomState::kComplete;
   }
   if (open_here) return finish(std::move(current), rec.in_room);
-  complete_rooms_.insert(complete_rooms_.end(), here.begin(), here.end());
+  for (const Point3& p : here)
+    if (rec.in_room) complete_rooms_.push_back(complete_at(p, rec.rooms[*rec.in_room]));
 
   // Then the other rooms, nearest by path first: the first open one is planned for.
   std::vector<std::size_t> order;
@@ -635,7 +648,7 @@ void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& rob
       return finish(std::move(res), i);
     }
     st.state = RoomState::kComplete;
-    complete_rooms_.push_back(in_room[i].front().position);
+    complete_rooms_.push_back(complete_at(in_room[i].front().position, st));
   }
   // Then the doors with a side where the robot cannot stand yet.
   if (std::optional<DoorwayChoice> look = plan_doorway_scan(rooms, status_of, in_room, all, nbv)) {

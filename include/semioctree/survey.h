@@ -360,8 +360,13 @@ class Survey {
   SurveyObserver silent_;
   SurveyMap map_;
   std::vector<ScanRecord> records_;
-  // kFloor: points inside the rooms found complete (a room holding one stays complete).
-  std::vector<Point3> complete_rooms_;
+  // kFloor: the rooms found complete (a room holding one's point, with about its bounds,
+  // stays complete).
+  struct CompleteRoom {
+    Point3 at;        // a point in it
+    Point3 min, max;  // its bounds then (Room::min, max)
+  };
+  std::vector<CompleteRoom> complete_rooms_;
   // kFloor: the doorway scans planned: the door's centre, the side looked into, and from
   // where (each door side is looked through once from each kind of position).
   struct DoorwayScan {
