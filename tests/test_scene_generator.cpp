@@ -264,10 +264,14 @@ TEST(MakeSceneCommand, BadOptionsExitNonZero) {
   EXPECT_NE(run_cli("make-scene --out " + out).exit_code, 0);  // no seed
   EXPECT_NE(run_cli("make-scene --seed 1").exit_code, 0);      // no output
   EXPECT_NE(run_cli("make-scene --seed 1 --out " + scratch().string()).exit_code, 0);
+  const CliRun rooms = run_cli("make-scene --seed 1 --kind room --rooms 5 --out " + out);
+  EXPECT_EQ(rooms.exit_code, 1);
+  EXPECT_NE(rooms.err.find("--kind floor"), std::string::npos) << rooms.err;
+  EXPECT_NE(run_cli("make-scene --seed 1 --kind floor --rooms 40 --out " + out).exit_code, 0);
   EXPECT_FALSE(fs::exists(out));
   const CliRun help = run_cli("make-scene --help");
   EXPECT_EQ(help.exit_code, 0);
-  for (const char* option : {"--seed", "--kind", "--out", "--force"})
+  for (const char* option : {"--seed", "--kind", "--rooms", "--out", "--force"})
     EXPECT_NE(help.out.find(option), std::string::npos) << option;
 }
 
