@@ -146,7 +146,14 @@ SceneResult evaluate(std::uint64_t seed, sim::GeneratedKind asked, const Options
       std::size_t complete = 0;
       for (const RoomStatus& room : survey.records().back().rooms)
         complete += room.state == RoomState::kComplete;
+      // The scene's rooms some scan stood in (its true position).
+      std::set<int> stood_in;
+      for (const sim_platform::ScanTruth& t : platform.truths()) {
+        const int room = plan.room_at(t.scanner_to_world.translation().head<2>());
+        if (true_rooms.count(room)) stood_in.insert(room);
+      }
       j["rooms"] = {{"in_scene", true_rooms.size()},
+                    {"stood_in", stood_in.size()},
                     {"found", survey.records().back().rooms.size()},
                     {"complete", complete}};
     }
