@@ -232,6 +232,18 @@ void write_plan(const json& survey, const fs::path& dir, std::vector<std::string
       scans.push_back({s.at("pose").at("x").get<double>(), s.at("pose").at("y").get<double>()});
   if (scans.empty()) return;
   all = scans;
+  // The robot's routes (survey.json's `route` of scans and failed scans), when recorded.
+  std::vector<std::vector<P>> routes;
+  const auto add_route = [&](const json& holder) {
+    if (!holder.contains("route") || !holder["route"].is_array() || holder["route"].empty()) return;
+    std::vector<P>& route = routes.emplace_back();
+    for (const json& p : holder["route"]) {
+      route.push_back({p.at(0).get<double>(), p.at(1).get<double>()});
+      all.push_back(route.back());
+    }
+  };
+  for (const json& s : survey["scans"]) add_route(s);
+  for (const json& f : survey.value("registration_failures", json::array())) add_route(f);
   const json& last = survey["scans"].back();
   std::optional<P> nbv;
   if (last.contains("nbv") && has_number(last["nbv"], "x"))
@@ -276,8 +288,11 @@ void write_plan(const json& survey, const fs::path& dir, std::vector<std::string
     img.text(X(x0) - 6, Y(gy), std::to_string(int(gy)), 11, black, 1.0);
   }
   img.outline_rect(X(x0), Y(y1), X(x1), Y(y0), black);
-  img.text(left, 16, "Plan: scans, next best view, doors and windows (m, survey frame)", 15, black,
-           0.0, true);
+  img.text(left, 16,
+           routes.empty() ? "Plan: scans, next best view, doors and windows (m, survey frame)"
+                          : "Plan: scans, the robot's route, next best view, doors and windows "
+                            "(m, survey frame)",
+           15, black, 0.0, true);
   if (room) {
     img.set_dashed(true);
     img.outline_rect(X((*room)[0].x), Y((*room)[1].y), X((*room)[1].x), Y((*room)[0].y),
@@ -298,8 +313,12 @@ void write_plan(const json& survey, const fs::path& dir, std::vector<std::string
              (Y(a.at(1).get<double>()) + Y(b.at(1).get<double>())) / 2 - 10, name, 12, c, 0.0,
              true);
   }
-  for (std::size_t i = 0; i + 1 < scans.size(); ++i)
-    img.line(X(scans[i].x), Y(scans[i].y), X(scans[i + 1].x), Y(scans[i + 1].y), black, 1.5);
+  if (routes.empty())
+    for (std::size_t i = 0; i + 1 < scans.size(); ++i)
+      img.line(X(scans[i].x), Y(scans[i].y), X(scans[i + 1].x), Y(scans[i + 1].y), black, 1.5);
+  for (const std::vector<P>& route : routes)
+    for (std::size_t i = 0; i + 1 < route.size(); ++i)
+      img.line(X(route[i].x), Y(route[i].y), X(route[i + 1].x), Y(route[i + 1].y), black, 1.5);
   if (nbv) {
     img.set_dashed(true);
     img.line(X(scans.back().x), Y(scans.back().y), X(nbv->x), Y(nbv->y), label_color(Label::kNbv),
