@@ -56,37 +56,30 @@ void close_openings(std::vector<std::uint8_t>& room_cell, const Plane& plane, do
 // border cells belong to no room, so every neighbour looked at lies on the plane.
 void trace_outlines(std::vector<Room>& rooms, const std::vector<std::int32_t>& room_of,
                     const Plane& plane, double r) {
-  const auto at = [&](int x, int y) { return room_of[plane.index(x, y)]; };
   const auto metres = [r](std::int64_t cell) { return float(double(cell) * r); };
-  for (const int side : {-1, 1}) {
-    // Rows: edges below (side -1) and above (+1) each run of cells.
-    for (int y = 1; y + 1 < plane.ny; ++y)
-      for (int x = 1; x + 1 < plane.nx;) {
-        const std::int32_t id = at(x, y);
-        if (id < 0 || at(x, y + side) == id) {
-          ++x;
-          continue;
+  // Along rows (along = x, across = y) and along columns (along = y, across = x): the
+  // edges on either side (side ±1 across) of each run of cells.
+  for (const bool rows : {true, false}) {
+    const int n_along = rows ? plane.nx : plane.ny, n_across = rows ? plane.ny : plane.nx;
+    const std::int64_t o_along = rows ? plane.x0 : plane.y0, o_across = rows ? plane.y0 : plane.x0;
+    const auto at = [&](int along, int across) {
+      return room_of[rows ? plane.index(along, across) : plane.index(across, along)];
+    };
+    for (const int side : {-1, 1})
+      for (int c = 1; c + 1 < n_across; ++c)
+        for (int u = 1; u + 1 < n_along;) {
+          const std::int32_t id = at(u, c);
+          if (id < 0 || at(u, c + side) == id) {
+            ++u;
+            continue;
+          }
+          const int start = u;
+          while (u + 1 < n_along && at(u, c) == id && at(u, c + side) != id) ++u;
+          const float e = metres(c + o_across + (side > 0 ? 1 : 0));
+          const float u0 = metres(start + o_along), u1 = metres(u + o_along);
+          rooms[std::size_t(id)].outline.push_back(rows ? std::array<float, 4>{u0, e, u1, e}
+                                                        : std::array<float, 4>{e, u0, e, u1});
         }
-        const int start = x;
-        while (x + 1 < plane.nx && at(x, y) == id && at(x, y + side) != id) ++x;
-        const float ey = metres(y + plane.y0 + (side > 0 ? 1 : 0));
-        rooms[std::size_t(id)].outline.push_back(
-            {metres(start + plane.x0), ey, metres(x + plane.x0), ey});
-      }
-    // Columns: edges left (-1) and right (+1) of each run of cells.
-    for (int x = 1; x + 1 < plane.nx; ++x)
-      for (int y = 1; y + 1 < plane.ny;) {
-        const std::int32_t id = at(x, y);
-        if (id < 0 || at(x + side, y) == id) {
-          ++y;
-          continue;
-        }
-        const int start = y;
-        while (y + 1 < plane.ny && at(x, y) == id && at(x + side, y) != id) ++y;
-        const float ex = metres(x + plane.x0 + (side > 0 ? 1 : 0));
-        rooms[std::size_t(id)].outline.push_back(
-            {ex, metres(start + plane.y0), ex, metres(y + plane.y0)});
-      }
   }
 }
 
