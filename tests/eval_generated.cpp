@@ -8,7 +8,7 @@
 // --check exits 1 when the totals miss the acceptance thresholds
 // (docs/generated-scenes.md).
 //
-//   eval_generated [--seeds 1-50] [--kind any|room|l-shape|hall|floor] [--rooms R]
+//   eval_generated [--seeds 1-50] [--kind any|room|l-shape|hall|floor] [--rooms R] [--size WxD]
 //                  [--threads T] [--max-scans N] [--cache DIR] [--check]
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -19,6 +19,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "planning_options.h"
@@ -39,6 +40,7 @@ struct Options {
   std::string seeds = "1-50";
   std::string kind = "any";
   int rooms = 0;
+  std::string size;  // a floor's WxD
   unsigned threads = 0;
   int max_scans = 10;
   std::string cache;
@@ -82,7 +84,10 @@ SceneResult evaluate(std::uint64_t seed, sim::GeneratedKind asked, const Options
   j["seed"] = seed;
   j["kind"] = sim::to_string(kind);
   try {
-    const sim::Scene scene = sim::generate_scene(seed, kind, o.rooms);
+    sim::FloorRequest floor;
+    floor.rooms = o.rooms;
+    if (!o.size.empty()) std::tie(floor.width, floor.depth) = sim::floor_size_from_string(o.size);
+    const sim::Scene scene = sim::generate_scene(seed, kind, floor);
     j["name"] = scene.name;
     j["robot_radius"] = scene.robot.radius;
     j["scanner_height"] = scene.scanner.height;
@@ -231,6 +236,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--rooms", o.rooms, "--kind floor: rooms of each floor (default: drawn, 3-10)")
       ->check(CLI::Range(sim::kMinFloorRooms, sim::kMaxFloorRooms));
+  app.add_option("--size", o.size,
+                 "--kind floor: each floor's outline WxD in metres (e.g. 60x45), cut into rooms");
   app.add_option("--threads", o.threads, "worker threads of each survey (0: one per core)")
       ->check(CLI::Range(0u, 256u))
       ->capture_default_str();

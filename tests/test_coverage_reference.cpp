@@ -15,6 +15,7 @@
 #include "semioctree/sim/coverage/visibility.h"
 #include "semioctree/sim/ground_truth.h"
 #include "semioctree/sim/scene.h"
+#include "semioctree/sim/scene_generator.h"
 #include "support/coverage_scenes.h"
 #include "support/sanitized.h"
 
@@ -135,6 +136,59 @@ TEST(CoverageReference, AgreesWithTheVisibilityRuleSampleBySample) {
     EXPECT_EQ(any, in[i]) << samples[i].position.transpose();
   }
   EXPECT_GT(checked, 500u);
+}
+
+// A floor of rooms: each sample is searched among the positions of the room it faces
+// (docs/coverage.md, "Rooms"), and the result is still the rule's, sample by sample. With
+// one wall lower than the scanner, no sample is searched so.
+TEST(CoverageReference, SearchesRoomByRoomAndStillAgreesWithTheRule) {
+  const Scene floor = generate_scene(2, GeneratedKind::floor, {3});
+  const GroundTruth truth(floor);
+  const auto samples = truth.surface_samples(0.05);
+  const CoverageReference ref = compute_coverage_reference(truth, 0.5, 0.05);
+  std::cout << floor.name << ": " << ref.samples_by_room << " of " << ref.sample_count
+            << " samples searched room by room, " << ref.visible.size() << " visible\n";
+  // The rest: outer faces (hidden from every position at once), jambs, lintels.
+  EXPECT_GT(ref.samples_by_room, ref.sample_count / 4);
+  const std::vector<bool> in = visible_flags(ref);
+  const std::size_t stride = sanitized() ? 211 : 41;
+  std::size_t checked = 0, seen = 0;
+  for (std::size_t i = 0; i < samples.size(); i += stride, ++checked) {
+    bool any = false;
+    for (const auto& c : ref.positions) any = any || sample_visible_from(truth, samples[i], c);
+    seen += any;
+    EXPECT_EQ(any, in[i]) << samples[i].position.transpose();
+  }
+  EXPECT_GT(seen, checked / 10);
+  EXPECT_LT(seen, checked);
+
+  Scene low = floor;
+  low.walls.back().z1 = 0.5 * low.scanner.height;
+  const CoverageReference open = compute_coverage_reference(GroundTruth(low), 0.5, 0.05);
+  EXPECT_EQ(open.samples_by_room, 0u);
+}
+
+// The finest spacing wherever the surface holds no more than the cap at it (the built-in
+// scenes, the lab included); a spacing that brings the count down to about the cap
+// beyond it.
+TEST(CoverageReference, SamplesMoreSparselyOnlyBeyondTheCap) {
+  for (const char* name : {"lab", "apartment", "office-floor"}) {
+    const GroundTruth truth(load(name));
+    EXPECT_EQ(coverage_sample_spacing(truth), 0.02) << name;
+  }
+  const GroundTruth box(load("box-room"));
+  const std::size_t at_2cm = box.surface_samples(0.02).size();
+  const std::size_t cap = at_2cm / 4;
+  const double spacing = coverage_sample_spacing(box, 0.02, cap);
+  EXPECT_GT(spacing, 0.035);
+  EXPECT_LT(spacing, 0.045);
+  const std::size_t count = box.surface_samples(spacing).size();
+  EXPECT_LE(count, cap + cap / 10);
+  EXPECT_GE(count, cap - cap / 5);
+  EXPECT_EQ(coverage_sample_spacing(box, 0.02, at_2cm + at_2cm / 10), 0.02);
+  const CoverageReference ref = compute_coverage_reference(box, 0.5, 0.02);
+  EXPECT_EQ(ref.sample_spacing, 0.02);
+  EXPECT_THROW(coverage_sample_spacing(box, 0.0), std::invalid_argument);
 }
 
 // The box room with a closed closet in its north-east corner (no door) and a cabinet

@@ -222,10 +222,10 @@ TEST(SceneGenerator, FloorsHaveTheirRoomsJoinedByDoorsTheRobotPasses) {
   EXPECT_GE(counts.size(), std::size_t(floors / 3));  // the seeds vary the count
   EXPECT_GT(corridors, 0);                            // and the layout
   EXPECT_LT(corridors, floors);
-  for (int asked : {kMinFloorRooms, 5, kMaxFloorRooms}) {
-    if (testing::sanitized() && asked == kMaxFloorRooms) continue;
+  for (int asked : {kMinFloorRooms, 5, 16}) {
+    if (testing::sanitized() && asked == 16) continue;
     SCOPED_TRACE(std::to_string(asked) + " rooms asked");
-    const Scene s = generate_scene(3, GeneratedKind::floor, asked);
+    const Scene s = generate_scene(3, GeneratedKind::floor, {asked});
     EXPECT_EQ(rooms_inside(expect_valid_layout(s)).size(), std::size_t(asked));
   }
 }
@@ -233,16 +233,43 @@ TEST(SceneGenerator, FloorsHaveTheirRoomsJoinedByDoorsTheRobotPasses) {
 TEST(SceneGenerator, AFloorAskedForTheRoomsItsSeedDrawsIsTheSameButForItsName) {
   const Scene drawn = generate_scene(4, GeneratedKind::floor);
   const int count = int(rooms_inside(GroundTruth(drawn).floor_plan(0.05)).size());
-  std::string asked = generate_scene_json(4, GeneratedKind::floor, count);
+  std::string asked = generate_scene_json(4, GeneratedKind::floor, {count});
   const std::string suffix = "-" + std::to_string(count) + "-rooms";
   const std::size_t at = asked.find(suffix);
   ASSERT_NE(at, std::string::npos);
   asked.erase(at, suffix.size());
   EXPECT_EQ(asked, generate_scene_json(4, GeneratedKind::floor));
-  EXPECT_THROW(generate_scene_json(4, GeneratedKind::floor, kMaxFloorRooms + 1),
+  EXPECT_THROW(generate_scene_json(4, GeneratedKind::floor, {kMaxFloorRooms + 1}),
                std::invalid_argument);
-  EXPECT_THROW(generate_scene_json(4, GeneratedKind::floor, 1), std::invalid_argument);
-  EXPECT_THROW(generate_scene_json(4, GeneratedKind::room, 5), std::invalid_argument);
+  EXPECT_THROW(generate_scene_json(4, GeneratedKind::floor, {1}), std::invalid_argument);
+  EXPECT_THROW(generate_scene_json(4, GeneratedKind::room, {5}), std::invalid_argument);
+}
+
+// A floor asked for by size: that rectangle inside the outer walls (the survey area), one
+// room per 20 m², cut from it without a corridor, and the rules of every floor.
+TEST(SceneGenerator, ASizedFloorIsThatRectangleCutIntoRooms) {
+  EXPECT_EQ(floor_size_from_string("30x20"), std::make_pair(30.0, 20.0));
+  EXPECT_EQ(floor_size_from_string("12.5X6"), std::make_pair(12.5, 6.0));
+  for (const char* bad : {"", "30", "30x", "30x20x2", "3x20", "30x200", "ax20", "30x20 "})
+    EXPECT_THROW(floor_size_from_string(bad), std::invalid_argument) << bad;
+  const Scene s = generate_scene(5, GeneratedKind::floor, {0, 20, 15});
+  EXPECT_EQ(s.name, "gen-floor-5-20x15m");
+  EXPECT_EQ(s.description.find("corridor"), std::string::npos);
+  double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+  ASSERT_TRUE(s.survey_area.has_value());
+  for (const Eigen::Vector2d& p : *s.survey_area)
+    x0 = std::min(x0, p.x()), y0 = std::min(y0, p.y()), x1 = std::max(x1, p.x()),
+    y1 = std::max(y1, p.y());
+  EXPECT_NEAR(x1 - x0, 20.0, 1e-9);
+  EXPECT_NEAR(y1 - y0, 15.0, 1e-9);
+  const FloorPlan plan = expect_valid_layout(s);
+  EXPECT_EQ(rooms_inside(plan).size(), 15u);  // 300 m² / 20
+  if (!testing::sanitized()) {
+    const Scene seven = generate_scene(5, GeneratedKind::floor, {7, 20, 15});
+    EXPECT_EQ(rooms_inside(expect_valid_layout(seven)).size(), 7u);
+  }
+  EXPECT_THROW(generate_scene_json(5, GeneratedKind::floor, {0, 30, 0}), std::invalid_argument);
+  EXPECT_THROW(generate_scene_json(5, GeneratedKind::floor, {60, 10, 8}), std::invalid_argument);
 }
 
 TEST(MakeSceneCommand, WritesASceneThatSceneInfoAccepts) {
@@ -273,11 +300,22 @@ TEST(MakeSceneCommand, BadOptionsExitNonZero) {
   const CliRun rooms = run_cli("make-scene --seed 1 --kind room --rooms 5 --out " + out);
   EXPECT_EQ(rooms.exit_code, 1);
   EXPECT_NE(rooms.err.find("--kind floor"), std::string::npos) << rooms.err;
-  EXPECT_NE(run_cli("make-scene --seed 1 --kind floor --rooms 40 --out " + out).exit_code, 0);
+  EXPECT_NE(run_cli("make-scene --seed 1 --kind floor --rooms 201 --out " + out).exit_code, 0);
+  for (const char* size : {"60", "60x", "x45", "5x45", "60x121", "60x45m", "sixtyx45"}) {
+    const CliRun r =
+        run_cli(std::string("make-scene --seed 1 --kind floor --size ") + size + " --out " + out);
+    EXPECT_EQ(r.exit_code, 1) << size;
+    EXPECT_NE(r.err.find("--size"), std::string::npos) << size << ": " << r.err;
+  }
+  const CliRun crowded =
+      run_cli("make-scene --seed 1 --kind floor --size 10x8 --rooms 12 --out " + out);
+  EXPECT_EQ(crowded.exit_code, 1);
+  EXPECT_NE(crowded.err.find("ask for fewer"), std::string::npos) << crowded.err;
+  EXPECT_EQ(run_cli("make-scene --seed 1 --kind hall --size 30x20 --out " + out).exit_code, 1);
   EXPECT_FALSE(fs::exists(out));
   const CliRun help = run_cli("make-scene --help");
   EXPECT_EQ(help.exit_code, 0);
-  for (const char* option : {"--seed", "--kind", "--rooms", "--out", "--force"})
+  for (const char* option : {"--seed", "--kind", "--rooms", "--size", "--out", "--force"})
     EXPECT_NE(help.out.find(option), std::string::npos) << option;
 }
 

@@ -201,14 +201,14 @@ struct Generator {
   std::vector<std::string> summary;
 
   // A floor's layout.
-  int rooms_asked = 0;
+  FloorRequest asked;
   double inner_thickness = 0;
   std::vector<Cell> cells;
   std::vector<Split> splits;
   std::vector<Door> doors;
 
-  Generator(std::uint64_t s, GeneratedKind k, int rooms)
-      : draw(s), kind(k), seed(s), rooms_asked(rooms) {}
+  Generator(std::uint64_t s, GeneratedKind k, const FloorRequest& floor)
+      : draw(s), kind(k), seed(s), asked(floor) {}
 
   json run();
   json run_floor();
@@ -630,12 +630,16 @@ Outline Generator::interior(const Cell& c) const {
                    c.x1 - (c.x1 < w - 1e-9 ? h : 0), c.y1 - (c.y1 < d - 1e-9 ? h : 0));
 }
 
-// Cuts a rectangle of about `rooms` × 12-28 m² into `rooms` cells: again and again the
-// largest cell that can be is cut across its longer side, at 35-65 %, each part keeping
-// `min_side` between centre lines. False if no cell can be cut before the count.
+// Cuts a rectangle (the one asked for, else one of about `rooms` × 12-28 m²) into `rooms`
+// cells: again and again the largest cell that can be is cut across its longer side, at
+// 35-65 %, each part keeping `min_side` between centre lines. False if no cell can be cut
+// before the count.
 bool Generator::partition_layout(int rooms, double min_side) {
-  const double area = rooms * draw.real(12, 28), aspect = draw.real(1.0, 1.8);
-  const double w = mm(std::sqrt(area * aspect)), d = mm(area / w);
+  double w = mm(asked.width), d = mm(asked.depth);
+  if (!asked.sized()) {
+    const double area = rooms * draw.real(12, 28), aspect = draw.real(1.0, 1.8);
+    w = mm(std::sqrt(area * aspect)), d = mm(area / w);
+  }
   room = rectangle(0, 0, w, d);
   cells = {Cell{0, 0, w, d}};
   splits.clear();
@@ -850,7 +854,9 @@ void Generator::write_inner_walls() {
 
 json Generator::run_floor() {
   const int drawn = draw.integer(3, 10);
-  const int rooms = rooms_asked ? rooms_asked : drawn;
+  const int per_area = std::clamp(int(std::lround(asked.width * asked.depth / 20.0)),
+                                  kMinFloorRooms, kMaxFloorRooms);
+  const int rooms = asked.rooms ? asked.rooms : asked.sized() ? per_area : drawn;
   height = mm(draw.real(2.5, 3.2));
   wall_thickness = std::round(draw.real(0.2, 0.3) * 50.0) / 50.0;    // outer, whole 2 cm
   inner_thickness = std::round(draw.real(0.1, 0.16) * 50.0) / 50.0;  // inner
@@ -866,10 +872,14 @@ json Generator::run_floor() {
   for (int attempt = 0; attempt < 200 && !laid_out; ++attempt) {
     summary.clear();
     keep_out.clear();
-    const bool corridor = rooms >= 3 && draw.chance(0.5);
+    const bool corridor = !asked.sized() && rooms >= 3 && draw.chance(0.5);
     laid_out = (corridor ? corridor_layout(rooms, min_side) : partition_layout(rooms, min_side)) &&
                make_doors(min_shared);
   }
+  if (!laid_out && asked.sized())
+    throw std::invalid_argument("a floor of " + num(asked.width) + " x " + num(asked.depth) +
+                                " m has no room for " + std::to_string(rooms) +
+                                " rooms 3 m across or more joined by doors: ask for fewer");
   if (!laid_out)
     throw std::logic_error("scene generator: no floor of " + std::to_string(rooms) +
                            " rooms for seed " + std::to_string(seed));
@@ -939,7 +949,12 @@ json Generator::scene_json(const json& robot, const json& scanner) const {
   for (std::size_t i = 0; i < summary.size(); ++i) description << (i ? "; " : "") << summary[i];
   description << "; robot radius " << robot_radius << " m, scanner at " << scanner_height << " m.";
   std::string name = std::string("gen-") + to_string(kind) + "-" + std::to_string(seed);
-  if (rooms_asked) name += "-" + std::to_string(rooms_asked) + "-rooms";
+  if (asked.rooms) name += "-" + std::to_string(asked.rooms) + "-rooms";
+  if (asked.sized()) {
+    char size[64];
+    std::snprintf(size, sizeof size, "-%gx%gm", asked.width, asked.depth);
+    name += size;
+  }
   json scene = {{"format", "semioctree-scene"},     {"version", 1},   {"name", name},
                 {"description", description.str()}, {"walls", walls}, {"slabs", slabs}};
   if (!boxes.empty()) scene["boxes"] = boxes;
@@ -956,16 +971,37 @@ GeneratedKind resolve_generated_kind(std::uint64_t seed, GeneratedKind kind) {
   return kind == GeneratedKind::any ? draw_kind(seed) : kind;
 }
 
-std::string generate_scene_json(std::uint64_t seed, GeneratedKind kind, int rooms) {
+std::pair<double, double> floor_size_from_string(const std::string& text) {
+  const std::size_t x = text.find_first_of("xX");
+  try {
+    std::size_t used_w = 0, used_d = 0;
+    const double w = std::stod(text.substr(0, x), &used_w);
+    const double d = x == std::string::npos ? 0 : std::stod(text.substr(x + 1), &used_d);
+    if (x != std::string::npos && used_w == x && used_d == text.size() - x - 1 &&
+        w >= kMinFloorSide && w <= kMaxFloorSide && d >= kMinFloorSide && d <= kMaxFloorSide)
+      return {w, d};
+  } catch (const std::exception&) {
+  }
+  throw std::invalid_argument("floor size '" + text + "': expected WxD in metres, each side " +
+                              num(kMinFloorSide, 0) + " to " + num(kMaxFloorSide, 0) +
+                              " (e.g. 60x45)");
+}
+
+std::string generate_scene_json(std::uint64_t seed, GeneratedKind kind, const FloorRequest& floor) {
   const GeneratedKind k = resolve_generated_kind(seed, kind);
-  if (rooms != 0 && k != GeneratedKind::floor)
-    throw std::invalid_argument(std::string("a room count is for floors, not for kind ") +
+  if ((floor.rooms != 0 || floor.sized()) && k != GeneratedKind::floor)
+    throw std::invalid_argument(std::string("a room count or size is for floors, not for kind ") +
                                 to_string(k));
-  if (rooms != 0 && (rooms < kMinFloorRooms || rooms > kMaxFloorRooms))
-    throw std::invalid_argument("a floor of " + std::to_string(rooms) + " rooms: expected " +
+  if (floor.rooms != 0 && (floor.rooms < kMinFloorRooms || floor.rooms > kMaxFloorRooms))
+    throw std::invalid_argument("a floor of " + std::to_string(floor.rooms) + " rooms: expected " +
                                 std::to_string(kMinFloorRooms) + " to " +
                                 std::to_string(kMaxFloorRooms));
-  Generator g(seed, k, rooms);
+  const auto side_ok = [](double v) { return v >= kMinFloorSide && v <= kMaxFloorSide; };
+  if (floor.sized() && !(side_ok(floor.width) && side_ok(floor.depth)))
+    throw std::invalid_argument("a floor of " + num(floor.width) + " x " + num(floor.depth) +
+                                " m: each side " + num(kMinFloorSide) + " to " +
+                                num(kMaxFloorSide) + " m, both given");
+  Generator g(seed, k, floor);
   const json scene = g.run();
   // One line per key, and per element of the arrays of objects (walls, boxes, ...).
   std::string text = "{\n";
@@ -986,9 +1022,9 @@ std::string generate_scene_json(std::uint64_t seed, GeneratedKind kind, int room
   return text + "\n}\n";
 }
 
-Scene generate_scene(std::uint64_t seed, GeneratedKind kind, int rooms) {
+Scene generate_scene(std::uint64_t seed, GeneratedKind kind, const FloorRequest& floor) {
   const GeneratedKind k = resolve_generated_kind(seed, kind);
-  return parse_scene_json(generate_scene_json(seed, k, rooms),
+  return parse_scene_json(generate_scene_json(seed, k, floor),
                           std::string("generated-") + to_string(k) + "-" + std::to_string(seed),
                           ".");
 }

@@ -1,10 +1,12 @@
-// `semioctree make-scene --seed N [--kind K] [--rooms R] --out F.scene.json`: writes the generated
-// scene of a seed (sim/include/semioctree/sim/scene_generator.h) to a file.
+// `semioctree make-scene --seed N [--kind K] [--rooms R] [--size WxD] --out F.scene.json`: writes
+// the generated scene of a seed (sim/include/semioctree/sim/scene_generator.h) to a file.
 #include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <tuple>
+#include <utility>
 
 #include "commands.h"
 #include "option_checks.h"
@@ -20,6 +22,7 @@ struct MakeSceneOptions {
   std::uint64_t seed = 1;
   std::string kind = "any";
   int rooms = 0;
+  std::string size;  // "WxD", metres
   std::string out;
   bool force = false;
 };
@@ -36,7 +39,18 @@ void run_make_scene(const MakeSceneOptions& o) {
   const sim::GeneratedKind kind = sim::generated_kind_from_string(o.kind);
   if (o.rooms != 0 && kind != sim::GeneratedKind::floor)
     throw std::invalid_argument("--rooms is for --kind floor, not " + o.kind);
-  const std::string text = sim::generate_scene_json(o.seed, kind, o.rooms);
+  if (!o.size.empty() && kind != sim::GeneratedKind::floor)
+    throw std::invalid_argument("--size is for --kind floor, not " + o.kind);
+  sim::FloorRequest floor;
+  floor.rooms = o.rooms;
+  if (!o.size.empty()) {
+    try {
+      std::tie(floor.width, floor.depth) = sim::floor_size_from_string(o.size);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string("--size: ") + e.what());
+    }
+  }
+  const std::string text = sim::generate_scene_json(o.seed, kind, floor);
   // What is written is what the reader accepts: a generator bug is reported, not saved.
   const sim::Scene scene = sim::parse_scene_json(text, o.out, ".");
   const fs::path dir = fs::path(o.out).parent_path();
@@ -74,9 +88,15 @@ void add_make_scene_command(CLI::App& app) {
       ->check(CLI::IsMember(sim::generated_kind_names()))
       ->capture_default_str();
   cmd->add_option("--rooms", o->rooms,
-                  "with --kind floor: the number of rooms, a corridor counting as one (2-16; "
-                  "default: drawn from the seed, 3-10)")
+                  "with --kind floor: the number of rooms, a corridor counting as one (" +
+                      std::to_string(sim::kMinFloorRooms) + "-" +
+                      std::to_string(sim::kMaxFloorRooms) +
+                      "; default: drawn from the seed, 3-10, or one per 20 m² with --size)")
       ->check(CLI::Range(sim::kMinFloorRooms, sim::kMaxFloorRooms));
+  cmd->add_option("--size", o->size,
+                  "with --kind floor: the outline, WxD metres along x and y (each side 6-120, "
+                  "e.g. 60x45); the rectangle is cut into rooms (no corridor); default: drawn "
+                  "from the seed");
   cmd->add_option("--out", o->out, "the scene file to write (e.g. gen-7.scene.json)")->required();
   cmd->add_flag("--force", o->force, "replace --out if it exists (refused without)");
   cmd->callback([o] { run_make_scene(*o); });

@@ -16,8 +16,9 @@ namespace semioctree::sim::detail {
 // Bump when the visibility rule, the grid of positions or the file layout changes: old
 // cache files then get another name and are never read. 2: nothing seen through an
 // opening; 3: reachable positions only; 4: nor through one from a position standing in
-// its doorway.
-constexpr std::uint32_t kCoverageRuleVersion = 4;
+// its doorway; 5: searched room by room, a gap between walls narrower than a plan cell
+// counting as closed (docs/coverage.md, "Rooms").
+constexpr std::uint32_t kCoverageRuleVersion = 5;
 // The floor-plan cell coverage_grid_positions finds the survey area with (part of the key).
 constexpr double kCoveragePlanCell = 0.05;
 

@@ -15,7 +15,8 @@ namespace semioctree::sim {
 // The surface samples that are visible from at least one scan position of a grid.
 struct CoverageReference {
   double grid_spacing = 0.5;     // metres between scan positions
-  double sample_spacing = 0.02;  // spacing passed to GroundTruth::surface_samples
+  double sample_spacing = 0.02;  // spacing passed to GroundTruth::surface_samples (see
+                                 // coverage_sample_spacing)
   std::size_t sample_count = 0;  // all surface samples of the scene at that spacing
   // Optical centres of the grid positions (world frame, z = scanner height); see
   // coverage_grid_positions.
@@ -29,7 +30,10 @@ struct CoverageReference {
   bool from_cache = false;
   std::string cache_file;             // the file read or written ("" if none)
   std::uint64_t segment_queries = 0;  // ray-caster queries made (0 when loaded)
-  double seconds = 0.0;               // wall time of this call (compute or load)
+  // Samples searched among the positions of the room they face only, the walls shutting
+  // the rooms off from each other (docs/coverage.md, "Rooms"; 0 when loaded).
+  std::uint64_t samples_by_room = 0;
+  double seconds = 0.0;  // wall time of this call (compute or load)
 };
 
 // The scan positions of the reference: a grid `grid_spacing` apart anchored at
@@ -38,9 +42,21 @@ struct CoverageReference {
 std::vector<Eigen::Vector3d> coverage_grid_positions(const GroundTruth& truth,
                                                      double grid_spacing = 0.5);
 
-// sample_visible_from applied to every sample and grid position, on `threads` threads
-// (0: one per hardware thread); the result does not depend on the number of threads.
-// Throws std::invalid_argument unless both spacings are > 0.
+// The most surface samples a reference takes (docs/coverage.md, "Floor scale"): 8 million
+// samples are 450 MB while the reference is computed, under 200 MB of points after.
+constexpr std::size_t kMaxCoverageSamples = 8'000'000;
+
+// The sample spacing of a reference: `finest` where the scene's surface holds at most
+// `max_samples` samples at it, else the spacing (whole millimetres) that brings the count
+// down to about `max_samples`. The coverage then measured is that of a sparser, evenly
+// spread subset of the same surfaces. Throws std::invalid_argument unless finest > 0.
+double coverage_sample_spacing(const GroundTruth& truth, double finest = 0.02,
+                               std::size_t max_samples = kMaxCoverageSamples);
+
+// sample_visible_from applied to every sample (at coverage_sample_spacing(truth,
+// sample_spacing)) and grid position, on `threads` threads (0: one per hardware thread);
+// the result does not depend on the number of threads. Throws std::invalid_argument
+// unless both spacings are > 0.
 CoverageReference compute_coverage_reference(const GroundTruth& truth, double grid_spacing = 0.5,
                                              double sample_spacing = 0.02, unsigned threads = 0);
 
@@ -49,6 +65,7 @@ CoverageReference compute_coverage_reference(const GroundTruth& truth, double gr
 std::string coverage_cache_key(const GroundTruth& truth, double grid_spacing = 0.5,
                                double sample_spacing = 0.02);
 
+// The reference at coverage_sample_spacing(truth, sample_spacing):
 // `<cache_dir>/coverage-<key>.bin` if present and intact, else computes the reference and
 // writes that file (cache_file is "" if it cannot be written: not an error). An empty
 // `cache_dir` means no cache: computed, nothing written.
