@@ -137,6 +137,7 @@ SolidModel::SolidModel(const Scene& scene) {
     const Cylinder& c = scene.cylinders[i];
     add_prism(cylinder_polygon(c), c.z0, c.z1, label("cylinders", i, c.name));
   }
+  index_boxes();
   for (std::size_t i = 0; i < scene.meshes.size(); ++i) {
     const MeshInstance& m = scene.meshes[i];
     TriangleSet set;
@@ -203,13 +204,65 @@ std::optional<double> SolidModel::first_hit(const Eigen::Vector3d& o, const Eige
   return std::nullopt;
 }
 
+void SolidModel::index_boxes() {
+  // Cells of 1 m, or fewer where the boxes spread over more than 512 m.
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(kInf), hi = -lo;
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> bounds;
+  for (const OrientedBox& b : boxes_) {
+    const Eigen::Vector2d half(
+        std::abs(b.axis_u.x()) * b.half.x() + std::abs(b.axis_v.x()) * b.half.y(),
+        std::abs(b.axis_u.y()) * b.half.x() + std::abs(b.axis_v.y()) * b.half.y());
+    const Eigen::Vector2d c = b.center.head<2>();
+    bounds.emplace_back(c - half, c + half);
+    lo = lo.cwiseMin(c - half);
+    hi = hi.cwiseMax(c + half);
+  }
+  BoxGrid& g = box_grid_;
+  if (boxes_.empty()) return;
+  g.cell = std::max(1.0, (hi - lo).maxCoeff() / 512.0);
+  g.origin = lo;
+  g.nx = static_cast<int>((hi.x() - lo.x()) / g.cell) + 1;
+  g.ny = static_cast<int>((hi.y() - lo.y()) / g.cell) + 1;
+  g.boxes.assign(static_cast<std::size_t>(g.nx) * static_cast<std::size_t>(g.ny), {});
+  for (std::size_t i = 0; i < bounds.size(); ++i) {
+    const auto cell_of = [&](double v, double o, int n) {
+      return std::clamp(static_cast<int>(std::floor((v - o) / g.cell)), 0, n - 1);
+    };
+    const int x0 = cell_of(bounds[i].first.x(), lo.x(), g.nx),
+              x1 = cell_of(bounds[i].second.x(), lo.x(), g.nx),
+              y0 = cell_of(bounds[i].first.y(), lo.y(), g.ny),
+              y1 = cell_of(bounds[i].second.y(), lo.y(), g.ny);
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x)
+        g.boxes[static_cast<std::size_t>(y) * static_cast<std::size_t>(g.nx) +
+                static_cast<std::size_t>(x)]
+            .push_back(static_cast<std::uint32_t>(i));
+  }
+}
+
+const std::vector<std::uint32_t>* SolidModel::BoxGrid::at(const Eigen::Vector2d& p) const {
+  const double fx = std::floor((p.x() - origin.x()) / cell),
+               fy = std::floor((p.y() - origin.y()) / cell);
+  if (!(fx >= 0 && fy >= 0 && fx < nx && fy < ny)) return nullptr;
+  return &boxes[static_cast<std::size_t>(fy) * static_cast<std::size_t>(nx) +
+                static_cast<std::size_t>(fx)];
+}
+
 std::string SolidModel::solid_containing(const Eigen::Vector3d& p, double margin,
                                          bool with_meshes) const {
-  for (const OrientedBox& b : boxes_) {
+  const auto inside = [&](const OrientedBox& b) {
     const Eigen::Vector3d r = p - b.center;
-    if (std::abs(r.z()) < b.half.z() - margin && std::abs(r.dot(b.axis_u)) < b.half.x() - margin &&
-        std::abs(r.dot(b.axis_v)) < b.half.y() - margin)
-      return b.name;
+    return std::abs(r.z()) < b.half.z() - margin &&
+           std::abs(r.dot(b.axis_u)) < b.half.x() - margin &&
+           std::abs(r.dot(b.axis_v)) < b.half.y() - margin;
+  };
+  if (margin >= 0) {  // inside a box deeper than margin ≥ 0: inside its bounds' cell
+    if (const std::vector<std::uint32_t>* near = box_grid_.at(p.head<2>()))
+      for (std::uint32_t i : *near)
+        if (inside(boxes_[i])) return boxes_[i].name;
+  } else {
+    for (const OrientedBox& b : boxes_)
+      if (inside(b)) return b.name;
   }
   for (const Prism& q : prisms_) {
     if (!(p.z() > q.z0 + margin && p.z() < q.z1 - margin)) continue;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -47,8 +48,20 @@ class SolidModel {
     Eigen::Vector3d min_corner, max_corner;
     std::string name;
   };
+  void index_boxes();  // fills box_grid_ from boxes_
+
   std::vector<OrientedBox> boxes_;  // box elements and the solid cells of walls
-  std::vector<Prism> prisms_;       // slabs and faceted cylinders
+  // The boxes by square cells of the xy-plane (each listed, in ascending order, in every
+  // cell its xy bounding box meets), so that a point is tested against the few boxes of
+  // its cell: a floor of a hundred rooms has a thousand.
+  struct BoxGrid {
+    Eigen::Vector2d origin = Eigen::Vector2d::Zero();
+    double cell = 1.0;
+    int nx = 0, ny = 0;
+    std::vector<std::vector<std::uint32_t>> boxes;  // per cell, row-major
+    const std::vector<std::uint32_t>* at(const Eigen::Vector2d& p) const;
+  } box_grid_;
+  std::vector<Prism> prisms_;  // slabs and faceted cylinders
   std::vector<TriangleSet> meshes_;
 };
 
