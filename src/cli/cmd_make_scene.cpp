@@ -76,7 +76,7 @@ void add_make_scene_command(CLI::App& app) {
       "or a hall with columns and a mezzanine, 0-4 doors and 0-4 windows; or a floor of rooms "
       "joined by doors (along a corridor, or cut from one rectangle); furniture, a robot and a "
       "scanner; all drawn from the seed, valid by construction (docs/generated-scenes.md). "
-      "The same seed, kind and room count give the same file.");
+      "The same seed, kind, room count and size give the same file.");
   cmd->add_option("--seed", o->seed, "the scene's seed: any whole number from 0")
       ->required()
       ->check(seed_value());
@@ -94,7 +94,8 @@ void add_make_scene_command(CLI::App& app) {
                       "; default: drawn from the seed, 3-10, or one per 20 m² with --size)")
       ->check(CLI::Range(sim::kMinFloorRooms, sim::kMaxFloorRooms));
   cmd->add_option("--size", o->size,
-                  "with --kind floor: the outline, WxD metres along x and y (each side 6-120, "
+                  "with --kind floor: the floor inside the outer walls, WxD metres along x and y "
+                  "(each side 6-120, "
                   "e.g. 60x45); the rectangle is cut into rooms (no corridor); default: drawn "
                   "from the seed");
   cmd->add_option("--out", o->out, "the scene file to write (e.g. gen-7.scene.json)")->required();
