@@ -971,6 +971,12 @@ GeneratedKind resolve_generated_kind(std::uint64_t seed, GeneratedKind kind) {
   return kind == GeneratedKind::any ? draw_kind(seed) : kind;
 }
 
+namespace {
+bool floor_side_ok(double side) {
+  return side >= kMinFloorSide && side <= kMaxFloorSide;
+}
+}  // namespace
+
 std::pair<double, double> floor_size_from_string(const std::string& text) {
   const std::size_t x = text.find_first_of("xX");
   try {
@@ -978,7 +984,7 @@ std::pair<double, double> floor_size_from_string(const std::string& text) {
     const double w = std::stod(text.substr(0, x), &used_w);
     const double d = x == std::string::npos ? 0 : std::stod(text.substr(x + 1), &used_d);
     if (x != std::string::npos && used_w == x && used_d == text.size() - x - 1 &&
-        w >= kMinFloorSide && w <= kMaxFloorSide && d >= kMinFloorSide && d <= kMaxFloorSide)
+        floor_side_ok(w) && floor_side_ok(d))
       return {w, d};
   } catch (const std::exception&) {
   }
@@ -996,8 +1002,7 @@ std::string generate_scene_json(std::uint64_t seed, GeneratedKind kind, const Fl
     throw std::invalid_argument("a floor of " + std::to_string(floor.rooms) + " rooms: expected " +
                                 std::to_string(kMinFloorRooms) + " to " +
                                 std::to_string(kMaxFloorRooms));
-  const auto side_ok = [](double v) { return v >= kMinFloorSide && v <= kMaxFloorSide; };
-  if (floor.sized() && !(side_ok(floor.width) && side_ok(floor.depth)))
+  if (floor.sized() && !(floor_side_ok(floor.width) && floor_side_ok(floor.depth)))
     throw std::invalid_argument("a floor of " + num(floor.width) + " x " + num(floor.depth) +
                                 " m: each side " + num(kMinFloorSide) + " to " +
                                 num(kMaxFloorSide) + " m, both given");

@@ -224,10 +224,10 @@ void SolidModel::index_boxes() {
   g.nx = static_cast<int>((hi.x() - lo.x()) / g.cell) + 1;
   g.ny = static_cast<int>((hi.y() - lo.y()) / g.cell) + 1;
   g.boxes.assign(static_cast<std::size_t>(g.nx) * static_cast<std::size_t>(g.ny), {});
+  const auto cell_of = [&](double v, double o, int n) {
+    return std::clamp(static_cast<int>(std::floor((v - o) / g.cell)), 0, n - 1);
+  };
   for (std::size_t i = 0; i < bounds.size(); ++i) {
-    const auto cell_of = [&](double v, double o, int n) {
-      return std::clamp(static_cast<int>(std::floor((v - o) / g.cell)), 0, n - 1);
-    };
     const int x0 = cell_of(bounds[i].first.x(), lo.x(), g.nx),
               x1 = cell_of(bounds[i].second.x(), lo.x(), g.nx),
               y0 = cell_of(bounds[i].first.y(), lo.y(), g.ny),

@@ -48,7 +48,6 @@ class RoomsOfPlan {
     for (const Wall& w : scene.walls) shut_ = shut_ && w.z0 <= lo && w.z1 >= hi;
   }
 
-  bool shut() const { return shut_; }
   int count() const { return static_cast<int>(plan_.room_area.size()); }
 
   // The room of a scan position (-1: none, in a doorway or a wall's footprint).
@@ -251,9 +250,9 @@ bool seen_from_any(const VisibilitySearch& search, SearchScratch& scratch, const
   scratch.by_room += room >= 0;
   const std::vector<std::uint32_t>& order = search.orders.of(s.position, room);
   // `last` may stand in another room: tried only if it is of this order's positions.
+  const int last_room = last != kNoPosition ? search.rooms.of_position(search.positions[last]) : -1;
   const bool last_admitted =
-      last != kNoPosition && (room < 0 || search.rooms.of_position(search.positions[last]) < 0 ||
-                              search.rooms.of_position(search.positions[last]) == room);
+      last != kNoPosition && (room < 0 || last_room < 0 || last_room == room);
   if (last_admitted && seen_from(search, scratch, s, target, last)) return true;
   for (std::uint32_t p : order) {
     if (p == last || !seen_from(search, scratch, s, target, p)) continue;
