@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <unordered_set>
@@ -15,28 +16,51 @@ namespace semioctree {
 
 namespace {
 
-// The bins of ReturnDirections: 180 rows of 1° of elevation, row r holding about
-// 360 cos(elevation) bins of azimuth (at least one).
+// Bins of directions seen from an optical centre: 180·k rows of 1/k degree of
+// elevation, row r holding about 360·k·cos(elevation) bins of azimuth (at least one), so
+// that every bin spans about (1/k)° × (1/k)°. ReturnDirections' bins have k = 1; its
+// depths (ReturnDirections::add_scan) a finer k.
 struct DirectionBins {
-  static constexpr int kRows = 180;
-  std::array<int, kRows> count{}, first{};
+  static constexpr int kMaxPerDegree = 8;
+  int per_degree = 1, rows = 180;
+  std::vector<int> count, first;
   int total = 0;
-  DirectionBins() {
-    for (int r = 0; r < kRows; ++r) {
-      count[r] = std::max(1, int(std::lround(360.0 * std::cos(row_elevation(r)))));
+  explicit DirectionBins(int k) : per_degree(k), rows(180 * k), count(rows), first(rows) {
+    for (int r = 0; r < rows; ++r) {
+      count[r] = std::max(1, int(std::lround(360.0 * k * std::cos(row_elevation(r)))));
       first[r] = total;
       total += count[r];
     }
   }
-  int row_of(double dx, double dy, double dz) const {
-    const double el = std::atan2(dz, std::hypot(dx, dy)) * (180.0 / M_PI) + 90.0;  // [0, 180]
-    return std::clamp(int(el), 0, kRows - 1);
+  // A direction as the bins index it: elevation in degrees above −90° (0–180), the
+  // azimuth's fraction of the full turn from −180°, and the vector's length.
+  struct Direction {
+    double elevation = 0, fraction = 0, length = 0;
+  };
+  // False for a zero or non-finite vector (a zero vector lies in the horizon's bin of
+  // azimuth 0).
+  static bool direction(double dx, double dy, double dz, Direction& d) {
+    const double horizontal = std::hypot(dx, dy);
+    d.length = std::hypot(horizontal, dz);
+    d.elevation = std::atan2(dz, horizontal) * (180.0 / M_PI) + 90.0;
+    d.fraction = fraction(dx, dy);
+    return std::isfinite(d.length) && d.length > 0;
+  }
+  int bin(const Direction& d) const {
+    const int r = std::clamp(int(d.elevation * per_degree), 0, rows - 1);
+    return first[r] + column(r, d.fraction);
+  }
+  // The bin of a direction given as a vector (not zero).
+  int bin_of(double dx, double dy, double dz) const {
+    Direction d;
+    direction(dx, dy, dz, d);
+    return bin(d);
   }
   // The bin of row r holding azimuth fraction f ∈ [0, 1] (of the full turn from −180°).
   int column(int r, double f) const { return std::clamp(int(f * count[r]), 0, count[r] - 1); }
   static double fraction(double dx, double dy) { return (std::atan2(dy, dx) + M_PI) / (2 * M_PI); }
   // The centre elevation of row r (radians), and the centre azimuth fraction of its bin i.
-  static double row_elevation(int r) { return (r + 0.5 - 90.0) * M_PI / 180.0; }
+  double row_elevation(int r) const { return ((r + 0.5) / per_degree - 90.0) * M_PI / 180.0; }
   double centre_fraction(int r, int i) const { return (i + 0.5) / count[r]; }
   // The centre direction of bin i of row r (unit length).
   Eigen::Vector3d centre(int r, int i) const {
@@ -45,9 +69,14 @@ struct DirectionBins {
   }
 };
 
-const DirectionBins& direction_bins() {
-  static const DirectionBins bins;
-  return bins;
+// The bins of k per degree, 1 ≤ k ≤ kMaxPerDegree.
+const DirectionBins& direction_bins(int per_degree = 1) {
+  static const std::vector<DirectionBins> bins = [] {
+    std::vector<DirectionBins> all;
+    for (int k = 1; k <= DirectionBins::kMaxPerDegree; ++k) all.emplace_back(k);
+    return all;
+  }();
+  return bins[std::size_t(std::clamp(per_degree, 1, DirectionBins::kMaxPerDegree) - 1)];
 }
 
 }  // namespace
@@ -56,19 +85,17 @@ ReturnDirections::ReturnDirections() : bins_(std::size_t(direction_bins().total)
 
 void ReturnDirections::add(const Eigen::Vector3d& d) {
   if (!d.allFinite() || (d.x() == 0 && d.y() == 0 && d.z() == 0)) return;
-  const DirectionBins& b = direction_bins();
-  const int r = b.row_of(d.x(), d.y(), d.z());
-  bins_[std::size_t(b.first[r] + b.column(r, DirectionBins::fraction(d.x(), d.y())))] = 1;
+  bins_[std::size_t(direction_bins().bin_of(d.x(), d.y(), d.z()))] = 1;
 }
 
 void ReturnDirections::close_gaps() {
   const DirectionBins& b = direction_bins();
   std::vector<std::uint8_t> grown(bins_);
-  for (int r = 0; r < DirectionBins::kRows; ++r)
+  for (int r = 0; r < b.rows; ++r)
     for (int i = 0; i < b.count[r]; ++i) {
       if (!bins_[std::size_t(b.first[r] + i)]) continue;
       const double f = b.centre_fraction(r, i);
-      for (int rr = std::max(0, r - 1); rr <= std::min(DirectionBins::kRows - 1, r + 1); ++rr) {
+      for (int rr = std::max(0, r - 1); rr <= std::min(b.rows - 1, r + 1); ++rr) {
         const int n = b.count[rr], j = b.column(rr, f);
         for (int dj = -1; dj <= 1; ++dj)  // azimuth wraps around
           grown[std::size_t(b.first[rr] + (j + dj + n) % n)] = 1;
@@ -84,7 +111,7 @@ void ReturnDirections::open_above() {
   const DirectionBins& b = direction_bins();
   constexpr int kSectors = 360;
   std::vector<std::uint8_t> covered(kSectors, 0);
-  for (int r = DirectionBins::kRows - 1; r >= DirectionBins::kRows / 2; --r) {
+  for (int r = b.rows - 1; r >= b.rows / 2; --r) {
     const int n = b.count[r];
     std::vector<std::uint8_t> covered_below(covered);
     for (int i = 0; i < n; ++i) {
@@ -105,7 +132,7 @@ void ReturnDirections::open_above() {
 void ReturnDirections::open_within(const PlatformBody& body, double min_range) {
   if (!(body.radius > 0) || !(min_range > 0)) return;
   const DirectionBins& b = direction_bins();
-  for (int r = 0; r < DirectionBins::kRows; ++r) {
+  for (int r = 0; r < b.rows; ++r) {
     // Row r spans elevations [lo, hi]; the body is convex and holds the optical centre,
     // so a segment lies inside it when its far end does, for every elevation of the row.
     const double lo = (r - 90.0) * M_PI / 180.0, hi = lo + M_PI / 180.0;
@@ -125,7 +152,7 @@ void ReturnDirections::open_where_free(const SemiOcTree& map, const Point3& opti
     return l == Label::kEmpty || l == Label::kScan || l == Label::kNbv || l == Label::kOut ||
            l == Label::kDoor || l == Label::kWindow;
   };
-  for (int r = 0; r < DirectionBins::kRows; ++r)
+  for (int r = 0; r < b.rows; ++r)
     for (int i = 0; i < b.count[r]; ++i) {
       std::uint8_t& bin = bins_[std::size_t(b.first[r] + i)];
       if (bin) continue;
@@ -140,9 +167,109 @@ void ReturnDirections::open_where_free(const SemiOcTree& map, const Point3& opti
 }
 
 bool ReturnDirections::has(double dx, double dy, double dz) const {
-  const DirectionBins& b = direction_bins();
-  const int r = b.row_of(dx, dy, dz);
-  return bins_[std::size_t(b.first[r] + b.column(r, DirectionBins::fraction(dx, dy)))] != 0;
+  return bins_[std::size_t(direction_bins().bin_of(dx, dy, dz))] != 0;
+}
+
+void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanner_to_map,
+                                unsigned threads) {
+  depth_per_degree_ = 0;
+  depth_cm_.clear();
+  const unsigned workers = detail::thread_count(threads);
+  const std::size_t chunk = 1 << 16, chunks = (scan.size() + chunk - 1) / chunk;
+  // f(direction) for each return of chunk c, in the map frame.
+  auto each_return = [&](std::size_t c, auto&& f) {
+    DirectionBins::Direction d;
+    for (std::size_t i = c * chunk, end = std::min(scan.size(), i + chunk); i < end; ++i) {
+      const Eigen::Vector3d v = scanner_to_map * Eigen::Vector3d(scan[i].x, scan[i].y, scan[i].z);
+      if (DirectionBins::direction(v.x(), v.y(), v.z(), d)) f(d);
+    }
+  };
+  // Pass 1: the 1° bins with returns, and how many returns they hold.
+  const DirectionBins& degree = direction_bins(1);
+  std::vector<std::vector<std::uint8_t>> hit(workers);
+  std::vector<std::size_t> returns(workers, 0);
+  detail::parallel_for(chunks, workers, 1, [&](std::size_t c, unsigned w) {
+    if (hit[w].empty()) hit[w].assign(std::size_t(degree.total), 0);
+    each_return(c, [&](const DirectionBins::Direction& d) {
+      hit[w][std::size_t(degree.bin(d))] = 1;
+      ++returns[w];
+    });
+  });
+  std::size_t total_returns = 0;
+  std::vector<std::uint8_t> any(std::size_t(degree.total), 0);
+  for (unsigned w = 0; w < workers; ++w) {
+    total_returns += returns[w];
+    for (std::size_t b = 0; b < hit[w].size(); ++b) any[b] |= hit[w][b];
+  }
+  const auto hit_bins = std::size_t(std::count(any.begin(), any.end(), std::uint8_t(1)));
+  for (std::size_t b = 0; b < bins_.size(); ++b) bins_[b] |= any[b];
+  if (hit_bins == 0) return;
+  // Pass 2: the depths, in bins holding about 4 returns each (two beams along each axis).
+  const int k =
+      std::clamp(int(std::floor(std::sqrt(double(total_returns) / double(hit_bins) / 4.0))), 1,
+                 DirectionBins::kMaxPerDegree);
+  const DirectionBins& bins = direction_bins(k);
+  struct Depths {
+    std::vector<float> nearest, farthest;
+    std::vector<std::uint8_t> count;
+  };
+  std::vector<Depths> per_worker(workers);
+  detail::parallel_for(chunks, workers, 1, [&](std::size_t c, unsigned w) {
+    Depths& d = per_worker[w];
+    if (d.count.empty()) {
+      d.nearest.assign(std::size_t(bins.total), std::numeric_limits<float>::infinity());
+      d.farthest.assign(std::size_t(bins.total), 0.0f);
+      d.count.assign(std::size_t(bins.total), 0);
+    }
+    each_return(c, [&](const DirectionBins::Direction& dir) {
+      const auto b = std::size_t(bins.bin(dir));
+      const auto range = float(dir.length);
+      d.nearest[b] = std::min(d.nearest[b], range);
+      d.farthest[b] = std::max(d.farthest[b], range);
+      if (d.count[b] < 255) ++d.count[b];
+    });
+  });
+  constexpr int kMinReturns = 4;
+  depth_cm_.assign(std::size_t(bins.total), 0);
+  for (std::size_t b = 0; b < depth_cm_.size(); ++b) {
+    float nearest = std::numeric_limits<float>::infinity(), farthest = 0;
+    int count = 0;
+    for (const Depths& d : per_worker) {
+      if (d.count.empty()) continue;
+      nearest = std::min(nearest, d.nearest[b]);
+      farthest = std::max(farthest, d.farthest[b]);
+      count += d.count[b];
+    }
+    if (count < kMinReturns) continue;
+    const double depth = 2.0 * double(farthest) - double(nearest);
+    depth_cm_[b] = std::uint16_t(std::clamp(std::ceil(100.0 * depth), 1.0, 65535.0));
+  }
+  depth_per_degree_ = k;
+}
+
+namespace {
+// Whether a point at distance² `length2` lies more than `tolerance` beyond `cm`, a depth
+// in centimetres (0 or the largest value: none).
+bool beyond_depth(std::uint16_t cm, double length2, double tolerance) {
+  if (cm == 0 || cm == 65535) return false;
+  const double limit = 0.01 * cm + tolerance;
+  return length2 > limit * limit;
+}
+}  // namespace
+
+bool ReturnDirections::behind_surface(double dx, double dy, double dz, double tolerance) const {
+  if (depth_cm_.empty()) return false;
+  return beyond_depth(depth_cm_[std::size_t(direction_bins(depth_per_degree_).bin_of(dx, dy, dz))],
+                      dx * dx + dy * dy + dz * dz, tolerance);
+}
+
+bool ReturnDirections::may_see(double dx, double dy, double dz, double tolerance) const {
+  DirectionBins::Direction d;
+  if (!DirectionBins::direction(dx, dy, dz, d)) return true;
+  if (!bins_[std::size_t(direction_bins().bin(d))]) return false;
+  return depth_cm_.empty() ||
+         !beyond_depth(depth_cm_[std::size_t(direction_bins(depth_per_degree_).bin(d))],
+                       d.length * d.length, tolerance);
 }
 
 std::size_t ReturnDirections::bins_with_returns() const {
@@ -153,7 +280,7 @@ std::shared_ptr<const ReturnDirections> return_directions(const Cloud& scan,
                                                           const Eigen::Matrix3d& scanner_to_map,
                                                           const ReturnDirectionsOptions& options) {
   auto r = std::make_shared<ReturnDirections>();
-  for (const auto& p : scan) r->add(scanner_to_map * Eigen::Vector3d(p.x, p.y, p.z));
+  r->add_scan(scan, scanner_to_map, options.threads);
   r->close_gaps();
   if (options.open_above) r->open_above();
   r->open_within(options.body, options.min_range);
@@ -174,9 +301,8 @@ std::shared_ptr<const ReturnDirections> return_directions_in_map(const octomap::
   rep.origin_free = own && !map.isNodeOccupied(own);
   const DirectionBins& b = direction_bins();
   // Rows overlapping the elevation limits (a row is 1°, from −90°).
-  const int row_lo = std::clamp(int(std::floor(limits.elevation_min_deg + 90.0)), 0, b.kRows - 1);
-  const int row_hi =
-      std::clamp(int(std::ceil(limits.elevation_max_deg + 90.0)) - 1, 0, b.kRows - 1);
+  const int row_lo = std::clamp(int(std::floor(limits.elevation_min_deg + 90.0)), 0, b.rows - 1);
+  const int row_hi = std::clamp(int(std::ceil(limits.elevation_max_deg + 90.0)) - 1, 0, b.rows - 1);
   std::vector<std::uint8_t> reached(std::size_t(b.total), 0);
   if (rep.origin_free && row_lo <= row_hi) {
     detail::parallel_for(std::size_t(row_hi - row_lo + 1), detail::thread_count(threads), 1,
@@ -292,7 +418,8 @@ Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, con
   const Point3& o = lim.view->position;
   const double dx = p.x - o.x, dy = p.y - o.y, dz = p.z - o.z;
   if (!lim.range_and_elevation.in_view(o, p)) return Visibility::kHidden;
-  if (lim.view->returns && !lim.view->returns->has(dx, dy, dz)) return Visibility::kHidden;
+  if (lim.view->returns && !lim.view->returns->may_see(dx, dy, dz, tree.leaf_size()))
+    return Visibility::kHidden;
   bool through_opening = false, blocked = false;
   auto visit = [&](const RayStep& s) {
     if (s.t_enter >= 1.0 - kEndTolerance) return false;

@@ -309,6 +309,7 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
   returns.open_above = !pre.ceiling_found;
   if (in.from_robot) returns.body = platform_body(params_.robot, params_.map.grid.leaf);
   returns.min_range = params_.map.limits.min_range;
+  returns.threads = params_.map.threads;
   if (!map_.empty()) {  // what the scans before saw free around this one
     returns.map = &map_.tree();
     returns.optical_centre = scanner;
@@ -500,8 +501,8 @@ std::optional<Survey::DoorwayChoice> Survey::plan_doorway_scan(
     NbvResult res = best_view_among(tree, {*plan.doorway}, beyond);
     if (!res.best || res.best->score <= 0) continue;
     const Eigen::Vector3d c = openings[plan.door].centre();
-    doorway_scans_.push_back({Point3(c.x(), c.y(), height), plan.side, plan.view});
-    return DoorwayChoice{std::move(res), plan.door, *beyond.room};
+    return DoorwayChoice{std::move(res), plan.door, *beyond.room,
+                         DoorwayScan{Point3(c.x(), c.y(), height), plan.side, plan.view}};
   }
   return std::nullopt;
 }
@@ -629,7 +630,16 @@ void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& rob
   for (const Point3& p : here)
     if (rec.in_room) complete_rooms_.push_back(complete_at(p, rec.rooms[*rec.in_room]));
 
-  // Then the other rooms, nearest by path first: the first open one is planned for.
+  // Then the other rooms, nearest by path first: the first open one is planned for,
+  // unless a doorway scan into a room the robot cannot stand in yet is nearer by path
+  // (that room is open too, and the doorway is where it is reached from).
+  std::optional<DoorwayChoice> look = plan_doorway_scan(rooms, status_of, in_room, all, nbv);
+  auto take_doorway = [&] {
+    doorway_scans_.push_back(look->scan);
+    rec.planned_doorway = look->door;
+    rec.room = look->beyond;
+    finish(std::move(look->nbv), std::nullopt);
+  };
   std::vector<std::size_t> order;
   for (std::size_t i = 0; i < rec.rooms.size(); ++i)
     if (rec.rooms[i].state == RoomState::kNotJudged) order.push_back(i);
@@ -644,6 +654,7 @@ void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& rob
     st.stop_percent = res.best ? std::optional<double>(res.stop_percent) : std::nullopt;
     if (res.best && res.stop_percent >= params_.stop_percent) {
       st.state = RoomState::kOpen;
+      if (look && look->nbv.best->path_m < res.best->path_m) return take_doorway();
       rec.room = next.room;
       return finish(std::move(res), i);
     }
@@ -651,11 +662,7 @@ void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& rob
     complete_rooms_.push_back(complete_at(in_room[i].front().position, st));
   }
   // Then the doors with a side where the robot cannot stand yet.
-  if (std::optional<DoorwayChoice> look = plan_doorway_scan(rooms, status_of, in_room, all, nbv)) {
-    rec.planned_doorway = look->door;
-    rec.room = look->beyond;
-    return finish(std::move(look->nbv), std::nullopt);
-  }
+  if (look) return take_doorway();
   // Every room the robot can reach is complete: the robot's room's result ends the survey.
   rec.scope_complete = current.best.has_value();
   finish(std::move(current), rec.in_room);

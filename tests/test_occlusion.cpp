@@ -427,6 +427,120 @@ TEST(Occlusion, SurfaceNearerThanTheMinimumRangeStillHides) {
   EXPECT_EQ(label_at(*tree, Point3(2.0, 3.0, 1.4)), Label::kEmpty);  // returns from y = 4
 }
 
+// The returns of a scanner at the origin whose beams step `step_deg` in azimuth and
+// elevation (within the given ranges, degrees); `hit(d)` gives the range at which the beam
+// of unit direction d meets a surface (≤ 0: none).
+template <typename Hit>
+Cloud lattice_scan(double step_deg, double az_lo, double az_hi, double el_lo, double el_hi,
+                   const Hit& hit) {
+  Cloud out;
+  for (double a = az_lo; a < az_hi; a += step_deg)
+    for (double e = el_lo; e < el_hi; e += step_deg) {
+      const double ar = a * M_PI / 180, er = e * M_PI / 180;
+      const Eigen::Vector3d d(std::cos(er) * std::cos(ar), std::cos(er) * std::sin(ar),
+                              std::sin(er));
+      const double t = hit(d);
+      if (t > 0) out.push_back(pcl::PointXYZ{float(t * d.x()), float(t * d.y()), float(t * d.z())});
+    }
+  return out;
+}
+
+// A scan's depths: beyond the surface its beams met, with a margin for how far apart
+// the beams are; none where a bin's beams met surfaces at very different ranges (an
+// edge), or where the scan is too sparse to tell.
+TEST(Occlusion, ReturnDirectionsRecordHowFarEachDirectionSaw) {
+  // A wall x = 3 for y < 1.1, and a far wall x = 10 behind it: the near wall's edge lies
+  // at azimuth atan(1.1/3) = 20.14°, inside the bin of 20°-20.5°.
+  auto walls = [](const Eigen::Vector3d& d) {
+    if (d.x() <= 0) return -1.0;
+    const double near = 3 / d.x();
+    return near * d.y() < 1.1 ? near : 10 / d.x();
+  };
+  const Cloud dense = lattice_scan(0.2, -60, 60, -40, 40, walls);
+  ReturnDirections r;
+  EXPECT_EQ(r.depth_bins_per_degree(), 0);
+  EXPECT_FALSE(r.behind_surface(20, 0, 0, 0.05));  // no depths: nothing is behind
+  r.add_scan(dense, Eigen::Matrix3d::Identity());
+  EXPECT_EQ(r.depth_bins_per_degree(), 2);  // 25 returns a degree² → bins of 0.5°: ~6 each
+  const double leaf = 0.05;
+  auto behind = [&](double x, double y, double z) { return r.behind_surface(x, y, z, leaf); };
+  // In front of the near wall, straight on and seen at 55° of incidence.
+  EXPECT_FALSE(behind(2.95, 0, 0));
+  EXPECT_FALSE(behind(2.95, -4.2, 1.0));
+  EXPECT_FALSE(behind(2.95, 0.9, -2.0));
+  // Behind it: 0.1 m straight on, 0.25 m at 55° (where a 0.5° bin spans 7 cm of range).
+  EXPECT_TRUE(behind(3.1, 0, 0));
+  EXPECT_TRUE(behind(3.25, -4.28, 0));
+  EXPECT_TRUE(behind(9, 1.5, 0));  // deep in its shadow, 9.5° of azimuth
+  // The edge's bin holds returns at 3 m and at 10 m: nothing in it is behind, neither
+  // what its beams saw past the edge (20.3°) nor what the near wall hides (20.05°).
+  const auto at = [](double az_deg, double range) {
+    return Eigen::Vector3d(range * std::cos(az_deg * M_PI / 180),
+                           range * std::sin(az_deg * M_PI / 180), 0);
+  };
+  EXPECT_FALSE(behind(at(20.3, 9).x(), at(20.3, 9).y(), 0));
+  EXPECT_FALSE(behind(at(20.05, 9).x(), at(20.05, 9).y(), 0));
+  EXPECT_TRUE(behind(at(19.5, 9).x(), at(19.5, 9).y(), 0));  // the bin before: near wall only
+  EXPECT_FALSE(behind(9, 3.6, 0));    // past the edge, in front of the far wall
+  EXPECT_TRUE(behind(10.5, 4.5, 0));  // behind the far wall
+  // Rotated into the map frame: the same depths about the map's axes.
+  ReturnDirections turned;
+  turned.add_scan(dense, Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).matrix());
+  EXPECT_TRUE(turned.behind_surface(0, 3.1, 0, leaf));
+  EXPECT_FALSE(turned.behind_surface(0, 2.95, 0, leaf));
+  EXPECT_FALSE(turned.behind_surface(3.1, 0, 0, leaf));  // no return that way
+
+  // A scan of 1° steps has about one return per bin: too sparse to bound a bin's depth.
+  ReturnDirections sparse;
+  sparse.add_scan(lattice_scan(1.0, -60, 60, -40, 40, walls), Eigen::Matrix3d::Identity());
+  EXPECT_EQ(sparse.depth_bins_per_degree(), 1);
+  EXPECT_FALSE(sparse.behind_surface(9, 1.5, 0, leaf));
+}
+
+// The map does not hold every surface a scan met: preprocessing cuts the ceiling's and
+// the floor's returns, and a face seen at a grazing angle is sampled more sparsely than
+// a leaf, so lines pass between its occupied leaves. What lies behind such a surface is
+// hidden by the scan's depths; the space in front of it stays seen.
+TEST(Occlusion, TheScansDepthsHideWhatLiesBehindASurfaceTheMapDoesNotHold) {
+  const Point3 scanner(0.0, 0.0, 1.2);
+  // A wall x = 3, y in [-2, 2], from the floor to 2.4 m, scanned in 0.2° steps.
+  auto wall = [&](const Eigen::Vector3d& d) {
+    if (d.x() <= 0) return -1.0;
+    const double t = 3.0 / d.x(), y = t * d.y(), z = scanner.z + t * d.z();
+    return (std::abs(y) <= 2 && z >= 0 && z <= 2.4) ? t : -1.0;
+  };
+  const Cloud seen = lattice_scan(0.2, -60, 60, -60, 60, wall);
+  // A map without the wall's points: only two far corners, which set its extent.
+  Cloud world;
+  world.push_back(pcl::PointXYZ{-1.0f, -3.0f, 0.01f});
+  world.push_back(pcl::PointXYZ{5.0f, 3.0f, 2.39f});
+  ScannerView view{scanner};
+  view.returns = return_directions(seen, Eigen::Matrix3d::Identity());
+  ASSERT_EQ(view.returns->depth_bins_per_degree(), 2);
+  const std::vector<Point3> behind = {{4.0, 0.0, 1.2}, {3.3, 1.0, 1.5}, {4.5, -1.5, 0.6}};
+  const std::vector<Point3> in_front = {
+      {2.8, 0.0, 1.2}, {2.0, 1.0, 0.8}, {1.5, -0.5, 1.6}, {2.9, -1.8, 1.3}};
+
+  ScannerView directions_only = view;
+  auto no_depths = std::make_shared<ReturnDirections>(*view.returns);
+  no_depths->add_scan(Cloud(), Eigen::Matrix3d::Identity());
+  directions_only.returns = no_depths;
+  const auto leaky = discretize(world, 2.4, {0.05, 0.8});
+  study_occlusion(*leaky, {directions_only});
+  for (const Point3& p : behind)
+    EXPECT_EQ(label_at(*leaky, p), Label::kEmpty) << p.x << ", " << p.y << ", " << p.z;
+
+  const auto tree = discretize(world, 2.4, {0.05, 0.8});
+  study_occlusion(*tree, {view});
+  for (const Point3& p : behind)
+    EXPECT_EQ(label_at(*tree, p), Label::kOccluded) << p.x << ", " << p.y << ", " << p.z;
+  for (const Point3& p : in_front)
+    EXPECT_EQ(label_at(*tree, p), Label::kEmpty) << p.x << ", " << p.y << ", " << p.z;
+  // Down to the last leaf before the wall (x 2.95-3.0) along a row at 1.3 m.
+  for (double y = -1.975; y < 2; y += 0.05)
+    EXPECT_EQ(label_at(*tree, Point3(2.975, y, 1.325)), Label::kEmpty) << y;
+}
+
 // The platform's body opens the directions whose segment to the minimum range it holds:
 // all of them down to its floor clearance and up to its top when it is as wide as the
 // minimum range; only the steep ones below when it is narrower.

@@ -69,8 +69,29 @@ class ReturnDirections {
   bool has(double dx, double dy, double dz) const;
   std::size_t bins_with_returns() const;
 
+  // Adds the direction of every return of a scan (given in the scanner's frame, optical
+  // centre at the origin, turned into the map frame by `scanner_to_map`) and records how
+  // far the scan saw in each direction: per bin of about twice the scan's angular step (k
+  // bins a degree, k from how many returns a 1° bin holds: 1 ≤ k ≤ 8), the depth beyond
+  // which every beam of the bin had met a surface. That is the bin's farthest return
+  // plus the spread of its returns (a beam between two of the bin's may reach that much
+  // further on a surface seen at a grazing angle); a bin with fewer than 4 returns
+  // records none. Replaces the depths recorded before. `threads`: 0, one per core.
+  void add_scan(const Cloud& scan, const Eigen::Matrix3d& scanner_to_map, unsigned threads = 0);
+  // Whether a point at (dx, dy, dz) from the optical centre (map frame) lies more than
+  // `tolerance` (m) beyond the depth of its bin: every beam around its direction met a
+  // surface before it, so the scan cannot have seen it, whatever the map holds there.
+  bool behind_surface(double dx, double dy, double dz, double tolerance) const;
+  // has(dx, dy, dz) and not behind_surface(dx, dy, dz, tolerance), in one look-up of the
+  // direction (true for a zero vector: the optical centre itself).
+  bool may_see(double dx, double dy, double dz, double tolerance) const;
+  // The depths' bins per degree (0: no depths recorded).
+  int depth_bins_per_degree() const { return depth_per_degree_; }
+
  private:
   std::vector<std::uint8_t> bins_;
+  int depth_per_degree_ = 0;
+  std::vector<std::uint16_t> depth_cm_;  // per depth bin, rounded up; 0: none
 };
 
 // How return_directions completes the directions of a scan.
@@ -82,6 +103,7 @@ struct ReturnDirectionsOptions {
   // open_where_free(*map, optical_centre, min_range). Null: not used (a first scan).
   const SemiOcTree* map = nullptr;
   Point3 optical_centre;
+  unsigned threads = 0;  // reading the scan's returns (0: one per core)
 };
 // Options with only open_above set: a scan whose platform is not known (a tripod, a file).
 inline ReturnDirectionsOptions open_above_if(bool open_above) {
@@ -92,7 +114,8 @@ inline ReturnDirectionsOptions open_above_if(bool open_above) {
 
 // The returns of a scan given in the scanner's frame (optical centre at the origin),
 // turned into the map frame by `scanner_to_map` (its translation is ignored), gaps closed,
-// then opened as `options` say (open_above, open_within, open_where_free).
+// then opened as `options` say (open_above, open_within, open_where_free); with their
+// depths (add_scan).
 std::shared_ptr<const ReturnDirections> return_directions(
     const Cloud& scan, const Eigen::Matrix3d& scanner_to_map,
     const ReturnDirectionsOptions& options = {});

@@ -323,17 +323,25 @@ class Survey {
   // rec.room and rec.nbv (docs/data-flow.md, "Scope").
   void plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& robot);
 
-  // A doorway scan planned (step 3 of plan_floor): its NBV result, the door looked
-  // through (an index into the map's openings) and what lies beyond it.
+  // A doorway scan: the door's centre, the side looked into, and from where.
+  struct DoorwayScan {
+    Point3 door;
+    int side = 1;
+    DoorwayView view = DoorwayView::kStraight;
+  };
+  // A doorway scan planned (plan_floor): its NBV result, the door looked through (an
+  // index into the map's openings), what lies beyond it, and the scan to record if it is
+  // taken.
   struct DoorwayChoice {
     NbvResult nbv;
     std::size_t door = 0;
     RoomBox beyond;
+    DoorwayScan scan;
   };
   // The nearest doorway scan that looks through a door into a side the robot cannot stand
   // in yet (docs/nbv.md, "Looking through a door again"); `rooms`, the index of each of
   // its rooms in the record's rooms (`status_of`), the candidates in each of those and
-  // all candidates as plan_floor found them. Records the doorway scan planned.
+  // all candidates as plan_floor found them.
   std::optional<DoorwayChoice> plan_doorway_scan(
       const RoomMap& rooms, const std::vector<std::optional<std::size_t>>& status_of,
       const std::vector<std::vector<NbvCandidate>>& in_room, const std::vector<NbvCandidate>& all,
@@ -367,13 +375,8 @@ class Survey {
     Point3 min, max;  // its bounds then (Room::min, max)
   };
   std::vector<CompleteRoom> complete_rooms_;
-  // kFloor: the doorway scans planned: the door's centre, the side looked into, and from
-  // where (each door side is looked through once from each kind of position).
-  struct DoorwayScan {
-    Point3 door;
-    int side = 1;
-    DoorwayView view = DoorwayView::kStraight;
-  };
+  // kFloor: the doorway scans planned (each door side is looked through once from each
+  // kind of position).
   std::vector<DoorwayScan> doorway_scans_;
 };
 
