@@ -139,12 +139,17 @@ SemiOcTree& SurveyMap::tree() {
 
 int SurveyMap::seen_side(const Eigen::Vector3d& point, const Eigen::Vector3d& normal) const {
   if (!tree_) return 0;
-  const Eigen::Vector3d step = 1.5 * tree_->leaf_size() * normal.normalized();
+  const Eigen::Vector3d n = tree_->leaf_size() * normal.normalized();
   auto seen_free = [&](const Eigen::Vector3d& p) {
     const std::optional<Octant> o = tree_->find_octant(Point3(p.x(), p.y(), p.z()));
     return o && nbv_detail::passable(o->label());
   };
-  const bool ahead = seen_free(point + step), behind = seen_free(point - step);
+  // Free a leaf and a half away and three and a half: a wall's inside may read free
+  // just behind its face (docs/registration.md, "The two faces of a wall").
+  auto side_free = [&](double sign) {
+    return seen_free(point + sign * 1.5 * n) && seen_free(point + sign * 3.5 * n);
+  };
+  const bool ahead = side_free(1.0), behind = side_free(-1.0);
   return ahead == behind ? 0 : (ahead ? 1 : -1);
 }
 

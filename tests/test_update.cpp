@@ -235,6 +235,29 @@ TEST(Update, EachScanKeepsTheDirectionsItGotReturnsIn) {
   EXPECT_NE(blind.views()[1].returns, nullptr);
 }
 
+// A surface's side is where the map holds free space both a leaf and a half and three
+// and a half leaves out: a wall's inside read free just behind its face (lines that
+// slipped through a face seen at a grazing angle) leaves the face its side; free space
+// at both depths on both sides (a thin board seen from both) leaves it none.
+TEST(Update, ASurfaceKeepsTheSideItWasSeenFromWhenItsInsideReadsFreeJustBehindIt) {
+  SurveyMap map(params());
+  map.add_scan(room_scan(false), Point3(1.0, 3.0, 1.2), 2.4);
+  // The pillar's west face (x = 2.0, the room at x < 2), at mid-height.
+  const Eigen::Vector3d face(2.0, 1.3, 0.8), east(1.0, 0.0, 0.0);
+  ASSERT_EQ(map.seen_side(face, east), -1);
+  ASSERT_EQ(map.seen_side(face, -east), 1);
+  const double leaf = map.tree().leaf_size();
+  auto read_free = [&](double depth) {
+    octomap::OcTreeKey k;
+    ASSERT_TRUE(map.tree().key_of(Point3(face.x() + depth * leaf, face.y(), face.z()), k));
+    map.tree().set_label(k, map.tree().leaf_level(), Label::kEmpty);
+  };
+  read_free(1.5);  // the inside, just behind the face
+  EXPECT_EQ(map.seen_side(face, east), -1);
+  read_free(3.5);  // and deeper: free on both sides
+  EXPECT_EQ(map.seen_side(face, east), 0);
+}
+
 // A real scan's returns from the scanner's mount and the robot's body lie
 // closer than the minimum range or below the lowest elevation: not mapped.
 TEST(Update, ReturnsOutsideTheScannerLimitsAreDropped) {

@@ -87,8 +87,9 @@ class SurveyMap {
   std::vector<ScannerView> views() const;
   // The side from which the scans saw the surface at `point` with normal `normal` (either
   // sign; survey frame): +1 along the normal, -1 against it, 0 when the map holds space
-  // seen free (or seen through an opening) a leaf and a half away on both sides or on
-  // neither (SurfaceFacing::target_side). 0 before the first scan.
+  // seen free (or seen through an opening) both a leaf and a half and three and a half
+  // leaves away on both sides or on neither (SurfaceFacing::target_side). 0 before the
+  // first scan.
   int seen_side(const Eigen::Vector3d& point, const Eigen::Vector3d& normal) const;
   const SurveyMapParams& params() const { return params_; }
 
