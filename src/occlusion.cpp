@@ -1,7 +1,6 @@
 #include "semioctree/occlusion.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -84,8 +83,9 @@ const DirectionBins& direction_bins(int per_degree = 1) {
 ReturnDirections::ReturnDirections() : bins_(std::size_t(direction_bins().total), 0) {}
 
 void ReturnDirections::add(const Eigen::Vector3d& d) {
-  if (!d.allFinite() || (d.x() == 0 && d.y() == 0 && d.z() == 0)) return;
-  bins_[std::size_t(direction_bins().bin_of(d.x(), d.y(), d.z()))] = 1;
+  DirectionBins::Direction dir;
+  if (DirectionBins::direction(d.x(), d.y(), d.z(), dir))
+    bins_[std::size_t(direction_bins().bin(dir))] = 1;
 }
 
 void ReturnDirections::close_gaps() {
