@@ -43,12 +43,20 @@ Cloud::Ptr random_subset(const Cloud& cloud, std::size_t count) {
     *out = cloud;
     return out;
   }
-  std::mt19937 rng(12345);
-  std::vector<std::size_t> idx(cloud.size());
-  std::iota(idx.begin(), idx.end(), 0);
-  std::shuffle(idx.begin(), idx.end(), rng);
-  out->reserve(count);
-  for (std::size_t i = 0; i < count; ++i) out->push_back(cloud[idx[i]]);
+  // 32-bit indices where they suffice: half the memory for a scan of millions of points;
+  // std::shuffle draws the same permutation whatever the index type.
+  auto draw = [&](auto first_index) {
+    std::mt19937 rng(12345);
+    std::vector<decltype(first_index)> idx(cloud.size());
+    std::iota(idx.begin(), idx.end(), first_index);
+    std::shuffle(idx.begin(), idx.end(), rng);
+    out->reserve(count);
+    for (std::size_t i = 0; i < count; ++i) out->push_back(cloud[idx[i]]);
+  };
+  if (cloud.size() <= std::numeric_limits<std::uint32_t>::max())
+    draw(std::uint32_t{0});
+  else
+    draw(std::size_t{0});
   return out;
 }
 
@@ -243,19 +251,35 @@ std::optional<double> top_of_points(const Cloud& cloud, double q) {
 
 }  // namespace
 
-namespace {
-
-// Number of cells of side `spacing` holding a point: the size UniformSampling
-// would give, without building its output.
-std::size_t count_cells(const Cloud& cloud, double spacing) {
-  PackedKeyMap<std::uint32_t> cells(cloud.size());
+// One table of at most cap + 1 keys first; past that, the parts are as many as keep
+// each table near the cap, from the share of the points read when the first one filled
+// (a scan's points sweep its surfaces in order).
+std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap) {
+  cap = std::max<std::size_t>(cap, 1);
   const double inv = 1.0 / spacing;
   auto cell = [inv](float v) { return std::uint64_t(std::int64_t(std::floor(double(v) * inv))); };
-  for (const auto& q : cloud) cells.insert(pack_cell_parts(cell(q.x), cell(q.y), cell(q.z)));
-  return cells.size();
+  auto key_of = [&](const pcl::PointXYZ& q) {
+    return pack_cell_parts(cell(q.x), cell(q.y), cell(q.z));
+  };
+  std::size_t read = 0;
+  {
+    PackedKeyMap<std::uint8_t> cells(std::min(cloud.size(), cap + 1));
+    for (; read < cloud.size() && cells.size() <= cap; ++read) cells.insert(key_of(cloud[read]));
+    if (cells.size() <= cap) return cells.size();
+  }
+  const double estimate = double(cap) * double(cloud.size()) / double(read);
+  const std::uint64_t parts = std::uint64_t(std::ceil(1.25 * estimate / double(cap)));
+  std::size_t count = 0;
+  for (std::uint64_t part = 0; part < parts; ++part) {
+    PackedKeyMap<std::uint8_t> cells(cap);
+    for (const pcl::PointXYZ& q : cloud) {
+      const std::uint64_t k = key_of(q);
+      if ((k * 0x9E3779B97F4A7C15ull >> 32) % parts == part) cells.insert(k);
+    }
+    count += cells.size();
+  }
+  return count;
 }
-
-}  // namespace
 
 Cloud::Ptr decimate(const Cloud::ConstPtr& cloud, double spacing) {
   Cloud::Ptr out(new Cloud);
@@ -271,7 +295,8 @@ Cloud::Ptr decimate(const Cloud::ConstPtr& cloud, double spacing) {
 }
 
 Cloud::Ptr decimate(const Cloud& cloud, double spacing) {
-  return decimate(Cloud::ConstPtr(new Cloud(cloud)), spacing);
+  // PCL's filters take a shared pointer; this one borrows `cloud` for the call (no copy).
+  return decimate(Cloud::ConstPtr(&cloud, [](const Cloud*) {}), spacing);
 }
 
 namespace {
@@ -365,12 +390,12 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   // Rotate, then find the peaks of the z histogram near the planes' heights.
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = level.toRotationMatrix();
-  // The rotated cloud becomes the cut one in place (a scan runs to millions of points).
-  Cloud::Ptr cut(new Cloud);
-  pcl::transformPointCloud(input, *cut, T.matrix().cast<float>());
+  // The levelled heights first, then only the points kept are levelled into the cut
+  // cloud: a scan runs to millions of points, a fit of them all is not copied.
+  const Eigen::Affine3f rotate(T.matrix().cast<float>());
+  std::vector<float> z(input.size());
+  for (std::size_t i = 0; i < input.size(); ++i) z[i] = pcl::transformPoint(input[i], rotate).z;
   {
-    std::vector<float> z(cut->size());
-    for (std::size_t i = 0; i < cut->size(); ++i) z[i] = (*cut)[i].z;
     const Eigen::Vector3d on_floor = T * Eigen::Vector3d(c.x(), c.y(), lowest->height_at(c));
     r.floor = fit_peak(z, on_floor.z(), p);
     r.floor.plane_inliers = lowest->inliers;
@@ -388,19 +413,27 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   r.floor.center = 0;
 
   const double zf = p.sigma_factor * r.floor.sigma, zc = p.sigma_factor * r.ceiling.sigma;
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < cut->size(); ++i) {
-    const pcl::PointXYZ& q = (*cut)[i];
-    const pcl::PointXYZ v(q.x, q.y, float(double(q.z) + T.translation().z()));
-    if (std::fabs(v.z - r.floor.center) <= zf) {
+  const double dz = T.translation().z();
+  std::vector<bool> in_band(input.size());  // on the floor or the ceiling: cut
+  for (std::size_t i = 0; i < input.size(); ++i) {
+    const float v = float(double(z[i]) + dz);
+    if (std::fabs(v - r.floor.center) <= zf) {
       ++r.floor.removed;
-    } else if (r.ceiling_found && std::fabs(v.z - r.ceiling.center) <= zc) {
+      in_band[i] = true;
+    } else if (r.ceiling_found && std::fabs(v - r.ceiling.center) <= zc) {
       ++r.ceiling.removed;
-    } else {
-      (*cut)[kept++] = v;
+      in_band[i] = true;
     }
   }
-  cut->resize(kept);
+  Cloud::Ptr cut(new Cloud);
+  cut->reserve(input.size() - r.floor.removed - r.ceiling.removed);
+  for (std::size_t i = 0; i < input.size(); ++i) {
+    if (in_band[i]) continue;
+    pcl::PointXYZ v = pcl::transformPoint(input[i], rotate);
+    v.z = float(double(z[i]) + dz);
+    cut->push_back(v);
+  }
+  z = {};
   cut->header = pcl::PCLHeader();
   cut->is_dense = true;
   // The room's height: given, the ceiling's, or the top of the points left.
@@ -435,14 +468,16 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     // under the target; accept 3 % under to exactly at it.
     const double goal = 0.99 * double(p.target_points);
     const double target = double(p.target_points);
-    double s0 = std::max(spacing, 0.01), c0 = double(count_cells(*cut, s0));
+    // A table of at most twice the target at once (count_cells).
+    const std::size_t cap = 2 * p.target_points;
+    double s0 = std::max(spacing, 0.01), c0 = double(count_cells(*cut, s0, cap));
     double s1 = std::max(spacing, s0 * std::sqrt(c0 / goal));
     // The finest spacing tried that keeps at most the target: on regular
     // (synthetic) grids the count jumps with the cells' phase and the secant
     // may not settle, so the result is always a spacing that was counted.
     double best = c0 <= target ? s0 : 0, best_count = c0 <= target ? c0 : 0;
     for (int it = 0; it < 12; ++it) {
-      const double c1 = double(count_cells(*cut, s1));
+      const double c1 = double(count_cells(*cut, s1, cap));
       if (c1 <= target && c1 > best_count) best = s1, best_count = c1;
       if (c1 <= target && c1 >= 0.97 * target) break;
       double slope = (std::log(c1) - std::log(c0)) / (std::log(s1) - std::log(s0));
@@ -453,7 +488,7 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
       if (c1 > target && s1 <= s0) s1 = s0 * 1.01;  // must get coarser
     }
     for (double s = std::max(s1, s0); best == 0; s *= 1.05)  // none small enough yet
-      if (double(count_cells(*cut, s)) <= target) best = s;
+      if (double(count_cells(*cut, s, cap)) <= target) best = s;
     spacing = best;
   }
   if (!decimated) decimated = spacing > 0 ? decimate(Cloud::ConstPtr(cut), spacing) : cut;

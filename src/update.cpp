@@ -182,8 +182,17 @@ ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,
   }
   scanners_.push_back(scanner);
   returns_.push_back(std::move(returns));
-  *merged_ += points;
-  if (params_.merged_spacing > 0) merged_ = decimate(*merged_, params_.merged_spacing);
+  if (params_.merged_spacing > 0) {
+    // The union into a cloud of its exact size, the old one freed before decimating it.
+    Cloud both;
+    both.reserve(merged_->size() + points.size());
+    both += *merged_;
+    both += points;
+    merged_.reset();
+    merged_ = decimate(both, params_.merged_spacing);
+  } else {
+    *merged_ += points;
+  }
   rep.seconds_occupancy = seconds_since(t0);
 
   t0 = Clock::now();

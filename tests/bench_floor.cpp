@@ -77,6 +77,7 @@ std::pair<double, double> reference_in_child(const sim::Scene& scene, const std:
 }  // namespace
 
 int main(int argc, char** argv) {
+  map_large_allocations();  // as the CLI does: the same peak memory
   std::string size = "60x45";
   std::uint64_t seed = 1;
   int rooms = 0, scans = 30;

@@ -223,6 +223,7 @@ SceneResult evaluate(std::uint64_t seed, sim::GeneratedKind asked, const Options
 }  // namespace
 
 int main(int argc, char** argv) {
+  map_large_allocations();  // as the CLI does: the same peak memory
   Options o;
   CLI::App app{
       "Surveys of generated scenes: per scene and in total, how the survey ended, scans, "

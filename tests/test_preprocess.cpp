@@ -142,6 +142,19 @@ std::size_t distinct_cells(const Cloud& c, double spacing) {
   return cells.size();
 }
 
+TEST(Preprocess, CountsCellsExactlyWithTablesOfBoundedSize) {
+  const auto room = testing::synthetic_room(8, 6, 3, 0.02, 0.002);
+  ASSERT_GT(room->size(), 100000u);
+  for (double spacing : {0.01, 0.03, 0.2}) {
+    const std::size_t truth = distinct_cells(*room, spacing);
+    // A table for all of them, and tables of a tenth and a fiftieth of the count
+    // (counted in about 13 and 63 parts).
+    EXPECT_EQ(count_cells(*room, spacing, room->size()), truth) << spacing;
+    EXPECT_EQ(count_cells(*room, spacing, truth / 10), truth) << spacing;
+    EXPECT_EQ(count_cells(*room, spacing, truth / 50), truth) << spacing;
+  }
+}
+
 TEST(Preprocess, DecimatesToSpacingOrTargetCount) {
   const auto room = testing::synthetic_room(8, 6, 3, 0.01, 0.002);
   PreprocessParams p;

@@ -257,6 +257,27 @@ TEST(Scanner, SameSeedSameScanWhateverTheThreadCount) {
                            one.points.size() * sizeof(one.points[0])));
 }
 
+TEST(Scanner, ALeanScanHasTheSamePointsAndNothingElse) {
+  const Loaded lab("lab");
+  ScannerConfig c = lab.scene.scanner;
+  c.azimuth_step_deg = c.elevation_step_deg = 0.5;
+  ScanOptions o;
+  o.seed = 7;
+  o.threads = 2;
+  const Scan full = scan(*lab.caster, c, {5.2, 3.6, 30.0}, o);
+  o.with_intensity = false;
+  o.with_grid_indices = false;
+  const Scan lean = scan(*lab.caster, c, {5.2, 3.6, 30.0}, o);
+  ASSERT_GT(full.points.size(), 1000u);
+  ASSERT_EQ(full.points.size(), full.row.size());
+  ASSERT_EQ(full.points.size(), lean.points.size());
+  EXPECT_EQ(0, std::memcmp(full.points.data(), lean.points.data(),
+                           full.points.size() * sizeof(full.points[0])));
+  EXPECT_TRUE(lean.intensity.empty());
+  EXPECT_TRUE(lean.row.empty());
+  EXPECT_TRUE(lean.col.empty());
+}
+
 TEST(PointFiles, SameSeedGivesByteIdenticalFiles) {
   const Loaded lab("lab");
   ScannerConfig c = lab.scene.scanner;

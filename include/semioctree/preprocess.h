@@ -84,9 +84,14 @@ class PreprocessError : public std::runtime_error {
 PreprocessResult preprocess(const Cloud& input, const PreprocessParams& params = {});
 
 // Decimates to a minimum spacing (PCL UniformSampling: one original point per
-// cell of that size); exposed for reuse and tests. The first form filters the
-// cloud it is given; the second copies it first (PCL filters take shared clouds).
+// cell of that size); exposed for reuse and tests. Both forms read the cloud in place
+// (the second lends it to PCL for the call, without a copy).
 Cloud::Ptr decimate(const Cloud::ConstPtr& cloud, double spacing);
+// Number of cells of side `spacing` (world-aligned, as decimate's) holding a point of
+// `cloud`, exactly, with tables of about `cap` keys at most: beyond that (a spacing much
+// finer than the points' on a scan of millions) the keys are split by their hash and
+// counted part by part, one pass over the points a part.
+std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap);
 Cloud::Ptr decimate(const Cloud& cloud, double spacing);
 
 }  // namespace semioctree

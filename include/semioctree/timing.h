@@ -6,6 +6,10 @@
 
 #include <chrono>
 
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+
 namespace semioctree {
 
 using Clock = std::chrono::steady_clock;
@@ -20,6 +24,17 @@ inline double peak_resident_mib() {
   rusage usage{};
   if (getrusage(RUSAGE_SELF, &usage) != 0) return 0.0;
   return double(usage.ru_maxrss) / 1024.0;  // Linux reports kibibytes
+}
+
+// For a program that runs surveys, called once at the start of main: blocks of 1 MiB and
+// more are mapped, and unmapped when freed (glibc's M_MMAP_THRESHOLD; a no-op with
+// other C libraries). A scan's buffers run to tens of megabytes and are freed each scan;
+// glibc's own threshold rises past the size of a freed mapped block and then carves such
+// buffers from the heap, whose freed space stays resident (docs/data-flow.md, "Memory").
+inline void map_large_allocations() {
+#ifdef __GLIBC__
+  mallopt(M_MMAP_THRESHOLD, 1 << 20);
+#endif
 }
 
 }  // namespace semioctree

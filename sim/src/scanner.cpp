@@ -132,7 +132,7 @@ Scan scan(const RayCaster& caster, const ScannerConfig& config, const Pose2& pos
       }
       RowResult& row = rows[r];
       row.points.reserve(g.cols);
-      row.col.reserve(g.cols);
+      if (options.with_grid_indices) row.col.reserve(g.cols);
       if (options.with_intensity) row.intensity.reserve(g.cols);
       for (std::uint32_t c = 0; c < g.cols; ++c) {
         if (!hits[c].hit) continue;
@@ -143,7 +143,7 @@ Scan scan(const RayCaster& caster, const ScannerConfig& config, const Pose2& pos
                                 static_cast<float>(se * range));
         if (options.with_intensity)
           row.intensity.push_back(std::abs(rays[c].direction.dot(hits[c].normal)));
-        row.col.push_back(c);
+        if (options.with_grid_indices) row.col.push_back(c);
       }
       const std::uint32_t done = ++rows_done;
       if (report && options.progress && done % 64 == 0) options.progress(done, g.rows);
@@ -158,8 +158,10 @@ Scan scan(const RayCaster& caster, const ScannerConfig& config, const Pose2& pos
   for (std::uint32_t r = 0; r < g.rows; ++r) offset[r + 1] = offset[r] + rows[r].points.size();
   const std::size_t total = offset[g.rows];
   out.points.resize(total);
-  out.row.resize(total);
-  out.col.resize(total);
+  if (options.with_grid_indices) {
+    out.row.resize(total);
+    out.col.resize(total);
+  }
   if (options.with_intensity) out.intensity.resize(total);
   std::atomic<std::uint32_t> next_copy{0};
   detail::run_on_threads(threads, [&](bool) {
@@ -167,8 +169,10 @@ Scan scan(const RayCaster& caster, const ScannerConfig& config, const Pose2& pos
       RowResult& row = rows[r];
       std::copy(row.points.begin(), row.points.end(),
                 out.points.begin() + static_cast<long>(offset[r]));
-      std::copy(row.col.begin(), row.col.end(), out.col.begin() + static_cast<long>(offset[r]));
-      std::fill_n(out.row.begin() + static_cast<long>(offset[r]), row.col.size(), r);
+      if (options.with_grid_indices) {
+        std::copy(row.col.begin(), row.col.end(), out.col.begin() + static_cast<long>(offset[r]));
+        std::fill_n(out.row.begin() + static_cast<long>(offset[r]), row.col.size(), r);
+      }
       if (options.with_intensity)
         std::copy(row.intensity.begin(), row.intensity.end(),
                   out.intensity.begin() + static_cast<long>(offset[r]));

@@ -15,6 +15,7 @@ sim::Scan scan_at(const SimulatedPlatform& p, const sim::Pose2& pose, std::uint6
   so.seed = seed;
   so.threads = p.threads();
   so.with_intensity = false;
+  so.with_grid_indices = false;
   return sim::scan(p.caster(), p.scene().scanner, pose, so);
 }
 

@@ -75,6 +75,7 @@ void run_coverage_bound(const CoverageBoundArgs& a) {
   so.seed = a.seed;
   so.threads = a.threads;
   so.with_intensity = false;
+  so.with_grid_indices = false;
   ProgressLine progress(stdout);
   for (std::size_t v = 0; v < positions.size(); ++v) {
     const sim::Scan s =

@@ -7,9 +7,11 @@
 #include <string>
 
 #include "commands.h"
+#include "semioctree/timing.h"
 #include "semioctree/version.h"
 
 int main(int argc, char** argv) {
+  semioctree::map_large_allocations();
   const std::string name = std::string("semioctree ") + semioctree::version();
   CLI::App app{name +
                " — Next-Best-View planning for indoor laser-scanning surveys on a semioctree\n"

@@ -23,6 +23,7 @@ PreparedCloud scan_scene_at_start(const std::string& scene_path, std::uint64_t s
   sim::ScanOptions so;
   so.seed = seed;
   so.with_intensity = false;
+  so.with_grid_indices = false;
   const sim::Scan s = sim::scan(*caster, scene.scanner, start, so);
   std::printf("scanned %s from (%.2f, %.2f): %llu rays, %zu points [%.2f s]\n", scene_path.c_str(),
               start.x, start.y, static_cast<unsigned long long>(s.rays_cast), s.points.size(),

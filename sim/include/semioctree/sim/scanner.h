@@ -24,6 +24,7 @@ struct ScanOptions {
   std::uint64_t seed = 1;  // range noise; the same seed gives the same scan
   unsigned threads = 0;    // 0: one per hardware thread; the result does not depend on it
   bool with_intensity = true;
+  bool with_grid_indices = true;  // Scan::row and Scan::col (8 bytes a point)
   // Called now and then from the calling thread with the number of grid rows done.
   std::function<void(std::uint32_t rows_done, std::uint32_t rows)> progress;
 };
@@ -54,8 +55,8 @@ struct Scan {
   // Returned points in the scanner frame (origin at the optical centre, x along the
   // heading, z up), in row-major grid order; rays without a return in range are absent.
   std::vector<Eigen::Vector3f> points;
-  std::vector<float> intensity;  // |cos| of the incidence angle, one per point (if asked)
-  std::vector<std::uint32_t> row;
+  std::vector<float> intensity;    // |cos| of the incidence angle, one per point (if asked)
+  std::vector<std::uint32_t> row;  // grid row and column, one per point (if asked)
   std::vector<std::uint32_t> col;
   std::uint64_t rays_cast = 0;
 
