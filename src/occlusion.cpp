@@ -166,6 +166,62 @@ void ReturnDirections::open_where_free(const SemiOcTree& map, const Point3& opti
     }
 }
 
+void ReturnDirections::open_far_edged_holes(double min_range, double elevation_min_deg,
+                                            double elevation_max_deg) {
+  if (!(min_range > 0) || nearest_cm_.empty()) return;
+  const DirectionBins& b = direction_bins();
+  const auto none = [&](int bin) { return nearest_cm_[std::size_t(bin)] == 0; };
+  // Rows wholly within the elevation limits (row r spans [r − 90°, r − 89°]).
+  const int row_lo = int(std::ceil(elevation_min_deg + 90.0));
+  const int row_hi = int(std::floor(elevation_max_deg + 90.0)) - 1;
+  std::vector<int> row_of(std::size_t(b.total));
+  for (int r = 0; r < b.rows; ++r) std::fill_n(row_of.begin() + b.first[r], b.count[r], r);
+  // f(neighbour bin) for the bins beside `bin` in its row (azimuth wraps around) and
+  // those of the rows above and below whose azimuths overlap it.
+  const auto for_each_neighbour = [&](int bin, auto&& f) {
+    const int r = row_of[std::size_t(bin)], i = bin - b.first[r], n = b.count[r];
+    f(b.first[r] + (i + 1) % n);
+    f(b.first[r] + (i + n - 1) % n);
+    const double f0 = double(i) / n, f1 = double(i + 1) / n;
+    for (const int rr : {r - 1, r + 1}) {
+      if (rr < 0 || rr >= b.rows) continue;
+      const int j1 = std::min(b.count[rr] - 1, int(std::ceil(f1 * b.count[rr])) - 1);
+      for (int j = b.column(rr, f0); j <= j1; ++j) f(b.first[rr] + j);
+    }
+  };
+  std::vector<std::uint8_t> visited(std::size_t(b.total), 0);
+  std::vector<int> hole, todo;
+  for (int start = 0; start < b.total; ++start) {
+    if (visited[std::size_t(start)] || !none(start)) continue;
+    // The hole holding `start`: its bins, its nearest edge return, whether it leaves the
+    // rows within the elevation limits.
+    hole.clear();
+    todo.assign(1, start);
+    visited[std::size_t(start)] = 1;
+    std::uint16_t edge_cm = 0;  // 0: no edge yet
+    bool within_limits = true;
+    while (!todo.empty()) {
+      const int bin = todo.back();
+      todo.pop_back();
+      hole.push_back(bin);
+      const int r = row_of[std::size_t(bin)];
+      within_limits &= r >= row_lo && r <= row_hi;
+      for_each_neighbour(bin, [&](int m) {
+        if (!none(m)) {
+          const std::uint16_t cm = nearest_cm_[std::size_t(m)];
+          edge_cm = edge_cm == 0 ? cm : std::min(edge_cm, cm);
+        } else if (!visited[std::size_t(m)]) {
+          visited[std::size_t(m)] = 1;
+          todo.push_back(m);
+        }
+      });
+    }
+    // (A hole with no edge at all is every direction: a scan without returns.)
+    if (within_limits && edge_cm != 0 && 0.01 * edge_cm >= 2.0 * min_range)
+      for (const int bin : hole) bins_[std::size_t(bin)] = 1;
+  }
+}
+
 bool ReturnDirections::has(double dx, double dy, double dz) const {
   return bins_[std::size_t(direction_bins().bin_of(dx, dy, dz))] != 0;
 }
@@ -186,23 +242,30 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
   };
   // Pass 1: the 1° bins with returns, and how many returns they hold.
   const DirectionBins& degree = direction_bins(1);
-  std::vector<std::vector<std::uint8_t>> hit(workers);
+  constexpr float kNone = std::numeric_limits<float>::infinity();
+  std::vector<std::vector<float>> nearest(workers);
   std::vector<std::size_t> returns(workers, 0);
   detail::parallel_for(chunks, workers, 1, [&](std::size_t c, unsigned w) {
-    if (hit[w].empty()) hit[w].assign(std::size_t(degree.total), 0);
+    if (nearest[w].empty()) nearest[w].assign(std::size_t(degree.total), kNone);
     each_return(c, [&](const DirectionBins::Direction& d) {
-      hit[w][std::size_t(degree.bin(d))] = 1;
+      float& n = nearest[w][std::size_t(degree.bin(d))];
+      n = std::min(n, float(d.length));
       ++returns[w];
     });
   });
   std::size_t total_returns = 0;
-  std::vector<std::uint8_t> any(std::size_t(degree.total), 0);
-  for (unsigned w = 0; w < workers; ++w) {
-    total_returns += returns[w];
-    for (std::size_t b = 0; b < hit[w].size(); ++b) any[b] |= hit[w][b];
+  for (unsigned w = 0; w < workers; ++w) total_returns += returns[w];
+  nearest_cm_.assign(std::size_t(degree.total), 0);
+  std::size_t hit_bins = 0;
+  for (std::size_t b = 0; b < nearest_cm_.size(); ++b) {
+    float n = kNone;
+    for (const std::vector<float>& v : nearest)
+      if (!v.empty()) n = std::min(n, v[b]);
+    if (n == kNone) continue;
+    nearest_cm_[b] = std::uint16_t(std::clamp(std::floor(100.0 * double(n)), 1.0, 65535.0));
+    bins_[b] = 1;
+    ++hit_bins;
   }
-  const auto hit_bins = std::size_t(std::count(any.begin(), any.end(), std::uint8_t(1)));
-  for (std::size_t b = 0; b < bins_.size(); ++b) bins_[b] |= any[b];
   if (hit_bins == 0) return;
   // Pass 2: the depths, in bins holding about 4 returns each (two beams along each axis).
   const int k =
@@ -285,6 +348,9 @@ std::shared_ptr<const ReturnDirections> return_directions(const Cloud& scan,
   if (options.open_above) r->open_above();
   r->open_within(options.body, options.min_range);
   if (options.map) r->open_where_free(*options.map, options.optical_centre, options.min_range);
+  if (options.open_far_edged_holes)
+    r->open_far_edged_holes(options.min_range, options.elevation_min_deg,
+                            options.elevation_max_deg);
   return r;
 }
 

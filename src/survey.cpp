@@ -309,6 +309,8 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
   returns.open_above = !pre.ceiling_found;
   if (in.from_robot) returns.body = platform_body(params_.robot, params_.map.grid.leaf);
   returns.min_range = params_.map.limits.min_range;
+  returns.elevation_min_deg = params_.map.limits.elevation_min_deg;
+  returns.elevation_max_deg = params_.map.limits.elevation_max_deg;
   returns.threads = params_.map.threads;
   if (!map_.empty()) {  // what the scans before saw free around this one
     returns.map = &map_.tree();
@@ -591,12 +593,16 @@ void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& rob
     if (std::any_of(complete_rooms_.begin(), complete_rooms_.end(),
                     [&](const CompleteRoom& c) { return status_near(c.at) == i && same(c, st); })) {
       st.state = RoomState::kComplete;
-    } else if (in_room[i].empty() && i != rec.in_room) {
+    } else if (in_room[i].empty()) {
       st.state = RoomState::kUnreachable;
       const Point3 centre(0.5 * (st.room.min.x + st.room.max.x),
                           0.5 * (st.room.min.y + st.room.max.y), height);
       st.why = params_.may_stand && !params_.may_stand(centre)
                    ? "outside the survey area (its centre)"
+               : i == rec.in_room
+                   ? "no position the robot can reach and stand in, although it stands at its "
+                     "edge (the space seen in it, or hidden space next to the robot, narrower "
+                     "than the robot's safety cylinder)"
                    : "no position the robot can reach and stand in (its doors, or the space "
                      "seen in it, narrower than the robot's safety cylinder)";
     }
@@ -616,19 +622,25 @@ void Survey::plan_floor(ScanRecord& rec, const NbvParams& nbv, const Point3& rob
   }
   rec.room = room_nbv.room;
   observer_->stage_done(SurveyStage::kRoomFound, rec);
-  NbvResult current = best_view_among(
-      tree, rec.in_room && !in_room[*rec.in_room].empty() ? in_room[*rec.in_room] : all, room_nbv);
+  // A room the robot stands at the edge of but can stand in nowhere (unreachable) is
+  // looked into from wherever it can reach; it is open while that is worth a scan, and
+  // never complete: it is judged again once a position in it can be reached.
+  const bool stands_in_it = rec.in_room && !in_room[*rec.in_room].empty();
+  NbvResult current = best_view_among(tree, stands_in_it ? in_room[*rec.in_room] : all, room_nbv);
   const bool known_complete = rec.in_room && rec.rooms[*rec.in_room].state == RoomState::kComplete;
   const bool open_here =
       !known_complete && current.best && current.stop_percent >= params_.stop_percent;
   if (rec.in_room) {
     RoomStatus& st = rec.rooms[*rec.in_room];
     st.stop_percent = current.best ? std::optional<double>(current.stop_percent) : std::nullopt;
-    st.state = open_here ? RoomState::kOpen : RoomState::kComplete;
+    if (open_here)
+      st.state = RoomState::kOpen;
+    else if (stands_in_it)
+      st.state = RoomState::kComplete;
   }
   if (open_here) return finish(std::move(current), rec.in_room);
   for (const Point3& p : here)
-    if (rec.in_room) complete_rooms_.push_back(complete_at(p, rec.rooms[*rec.in_room]));
+    if (stands_in_it) complete_rooms_.push_back(complete_at(p, rec.rooms[*rec.in_room]));
 
   // Then the other rooms, nearest by path first: the first open one is planned for,
   // unless a doorway scan into a room the robot cannot stand in yet is nearer by path

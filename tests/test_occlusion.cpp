@@ -445,6 +445,54 @@ Cloud lattice_scan(double step_deg, double az_lo, double az_hi, double el_lo, do
   return out;
 }
 
+// Holes in a scan's returns, scanner at the origin in a 4 m box room (minimum range
+// 0.6 m, elevations −60°..90°): a window (no surface beyond) whose edges lie 3-4 m
+// away opens; a post 0.45 m away (inside the minimum range from −40° to 40° of
+// elevation, seen beyond it above and below) keeps its hole hidden, as does a hole
+// that reaches the lower elevation limit (nothing is known below it).
+TEST(Occlusion, HolesInTheReturnsOpenOnlyWhenTheirEdgesLieFar) {
+  constexpr double kMinRange = 0.6;
+  auto room = [](const Eigen::Vector3d& d) {
+    const double az = std::atan2(d.y(), d.x()) * 180 / M_PI;
+    const double el = std::asin(d.z()) * 180 / M_PI;
+    if (az > 20 && az < 30 && el > 0 && el < 10) return -1.0;         // the window
+    if (az > -150 && az < -140 && el > -62 && el < -50) return -1.0;  // down to −62°
+    double t = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a)  // walls 4 m away, floor and ceiling 1.2 m
+      if (d[a] != 0) t = std::min(t, (a == 2 ? 1.2 : 4.0) / std::abs(d[a]));
+    if (d.y() > 0) {  // the post: the plane y = 0.45 for |x| < 0.1
+      const double p = 0.45 / d.y();
+      if (std::abs(p * d.x()) < 0.1 && p < t) t = p;
+    }
+    return t < kMinRange ? -1.0 : t;  // the scanner drops what lies nearer
+  };
+  ReturnDirections r;
+  r.add_scan(lattice_scan(0.2, -180, 180, -60, 90, room), Eigen::Matrix3d::Identity());
+  const auto has = [&](const ReturnDirections& d, double a_deg, double e_deg) {
+    const double a = a_deg * M_PI / 180, e = e_deg * M_PI / 180;
+    return d.has(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e));
+  };
+  for (const auto& [a, e] : {std::pair{25.0, 5.0}, {90.0, 0.0}, {-145.0, -55.0}})
+    ASSERT_FALSE(has(r, a, e)) << a << ", " << e;
+  ReturnDirections opened = r;
+  opened.open_far_edged_holes(kMinRange, -60, 90);
+  EXPECT_TRUE(has(opened, 25, 5));       // the window
+  EXPECT_FALSE(has(opened, 90, 0));      // behind the post
+  EXPECT_FALSE(has(opened, -145, -55));  // down to the limit
+  // The window's 10° × 10°, less the bins its edges share with returns.
+  EXPECT_GE(opened.bins_with_returns() - r.bins_with_returns(), 81u);
+  EXPECT_LE(opened.bins_with_returns() - r.bins_with_returns(), 100u);
+  // A scanner whose limit is −70°: the same hole ends 8° above it and has far edges.
+  ReturnDirections deeper;
+  deeper.add_scan(lattice_scan(0.2, -180, 180, -70, 90, room), Eigen::Matrix3d::Identity());
+  deeper.open_far_edged_holes(kMinRange, -70, 90);
+  EXPECT_TRUE(has(deeper, -145, -55));
+  // A minimum range for which the window's edges are not far enough: nothing opens.
+  ReturnDirections near = r;
+  near.open_far_edged_holes(2.5, -60, 90);
+  EXPECT_EQ(near.bins_with_returns(), r.bins_with_returns());
+}
+
 // A scan's depths: beyond the surface its beams met, with a margin for how far apart
 // the beams are; none where a bin's beams met surfaces at very different ranges (an
 // edge), or where the scan is too sparse to tell.
@@ -579,10 +627,12 @@ TEST(Occlusion, ReturnDirectionsOpenWithinThePlatformsBody) {
 }
 
 // A closed room with a window 3 m in front of the scanner and nothing beyond it: the
-// directions through the window get no returns. From a tripod (no body known) the space
-// between the scanner and the window stays hidden: a surface nearer than the minimum range
-// could have blocked those beams. A robot 0.6 m wide holds that space itself, so the beams
-// met nothing within range: the space is seen.
+// directions through the window get no returns. Judged by the returns' directions alone
+// (no far-edged holes), from a tripod (no body known) the space between the scanner and
+// the window stays hidden: a surface nearer than the minimum range could have blocked
+// those beams. A robot 0.6 m wide holds that space itself, so the beams met nothing within
+// range: the space is seen. So it is too when the hole's edges are known to lie far
+// (open_far_edged_holes, on by default): the window's frame, 3 m away.
 TEST(Occlusion, NoReturnsThroughAWindowHideNothingFromAPlatformAsWideAsTheMinimumRange) {
   const Point3 scanner(1.0, 2.0, 1.2);
   Cloud world, seen;
@@ -601,16 +651,18 @@ TEST(Occlusion, NoReturnsThroughAWindowHideNothingFromAPlatformAsWideAsTheMinimu
 
   PlatformBody robot;
   robot.radius = 0.6, robot.below = 1.15, robot.above = 0.1;
-  auto study = [&](const PlatformBody& body) {
+  auto study = [&](const PlatformBody& body, bool far_edged_holes = false) {
     auto tree = discretize(world, 2.4, {0.05, 0.8});
     ReturnDirectionsOptions options;
     options.body = body;
     options.min_range = 0.6;
+    options.open_far_edged_holes = far_edged_holes;
     ScannerView view{scanner};
     view.returns = return_directions(seen, Eigen::Matrix3d::Identity(), options);
     study_occlusion(*tree, {view});
     return tree;
   };
+  EXPECT_EQ(label_at(*study(PlatformBody{}, true), before_window), Label::kEmpty);
   const auto tripod = study(PlatformBody{});
   EXPECT_EQ(label_at(*tripod, before_window), Label::kOccluded);
   EXPECT_EQ(label_at(*tripod, beside), Label::kEmpty);
@@ -631,7 +683,7 @@ TEST(Occlusion, NoReturnsThroughAWindowHideNothingFromAPlatformAsWideAsTheMinimu
         pcl::PointXYZ{float(p.x - behind.x), float(p.y - behind.y), float(p.z - behind.z)});
   auto before = discretize(world, 2.4, {0.05, 0.8});
   ScannerView from_behind{behind};
-  from_behind.returns = return_directions(seen_behind, Eigen::Matrix3d::Identity());
+  from_behind.returns = return_directions(seen_behind, Eigen::Matrix3d::Identity());  // (far-edged)
   study_occlusion(*before, {from_behind});
   for (const Point3& near : {Point3(1.5, 2.0, 1.2), Point3(1.0, 1.5, 1.2), Point3(1.3, 2.3, 1.4)})
     ASSERT_EQ(label_at(*before, near), Label::kEmpty);
@@ -639,6 +691,7 @@ TEST(Occlusion, NoReturnsThroughAWindowHideNothingFromAPlatformAsWideAsTheMinimu
   ReturnDirectionsOptions options;
   options.body = robot;
   options.min_range = 0.6;
+  options.open_far_edged_holes = false;
   options.map = before.get();
   options.optical_centre = scanner;
   ScannerView view{scanner};

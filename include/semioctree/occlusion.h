@@ -66,6 +66,15 @@ class ReturnDirections {
   // the maximum range: it left through a window or a door the map does not see beyond.
   // A bin is judged by its centre direction.
   void open_where_free(const SemiOcTree& map, const Point3& optical_centre, double min_range);
+  // For any scan: every hole in the returns (a connected region of directions that got
+  // none, judged before close_gaps) whose edge returns all lie at least twice the
+  // minimum range away, and which stays within the elevation limits, counts as having
+  // returns. A surface nearer than the minimum range that hid the hole would cross the
+  // minimum range at the hole's edge (a wall, a jamb, a post: returns there lie just
+  // beyond it) unless it floats wholly inside the hole's cone, held by nothing thicker
+  // than the scan's step: the beam left through an opening (docs/occlusion.md).
+  // Needs the nearest returns add_scan records.
+  void open_far_edged_holes(double min_range, double elevation_min_deg, double elevation_max_deg);
   bool has(double dx, double dy, double dz) const;
   std::size_t bins_with_returns() const;
 
@@ -91,7 +100,8 @@ class ReturnDirections {
  private:
   std::vector<std::uint8_t> bins_;
   int depth_per_degree_ = 0;
-  std::vector<std::uint16_t> depth_cm_;  // per depth bin, rounded up; 0: none
+  std::vector<std::uint16_t> depth_cm_;    // per depth bin, rounded up; 0: none
+  std::vector<std::uint16_t> nearest_cm_;  // per bin, the nearest return, rounded down; 0: none
 };
 
 // How return_directions completes the directions of a scan.
@@ -99,18 +109,16 @@ struct ReturnDirectionsOptions {
   bool open_above = false;  // the scan found no ceiling: open_above()
   PlatformBody body;        // the platform it was taken from: open_within(body, min_range)
   double min_range = 0.6;   // the scanner's minimum range, m
+  // The scanner's elevation limits (degrees, 0 = horizontal) and whether holes with far
+  // edges open: open_far_edged_holes(min_range, elevation_min_deg, elevation_max_deg).
+  double elevation_min_deg = -60, elevation_max_deg = 90;
+  bool open_far_edged_holes = true;
   // The map of the scans before and the scan's optical centre in it:
   // open_where_free(*map, optical_centre, min_range). Null: not used (a first scan).
   const SemiOcTree* map = nullptr;
   Point3 optical_centre;
   unsigned threads = 0;  // reading the scan's returns (0: one per core)
 };
-// Options with only open_above set: a scan whose platform is not known (a tripod, a file).
-inline ReturnDirectionsOptions open_above_if(bool open_above) {
-  ReturnDirectionsOptions o;
-  o.open_above = open_above;
-  return o;
-}
 
 // The returns of a scan given in the scanner's frame (optical centre at the origin),
 // turned into the map frame by `scanner_to_map` (its translation is ignored), gaps closed,
@@ -133,6 +141,17 @@ struct ScannerView {
   // all a map without its scans, such as an OctoMap map, can say).
   std::shared_ptr<const ReturnDirections> returns;
 };
+
+// Options for a scan whose platform is not known (a tripod, a file): the scanner's
+// limits and open_above; no body, no map.
+inline ReturnDirectionsOptions returns_options(const ScannerView& limits, bool open_above) {
+  ReturnDirectionsOptions o;
+  o.open_above = open_above;
+  o.min_range = limits.min_range;
+  o.elevation_min_deg = limits.elevation_min_deg;
+  o.elevation_max_deg = limits.elevation_max_deg;
+  return o;
+}
 
 struct MapReturnsReport {
   bool origin_free = false;      // the map holds the optical centre's leaf as free

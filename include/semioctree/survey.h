@@ -93,7 +93,7 @@ struct IncomingScan {
 // A room of the floor (SurveyScope::kFloor) as one scan's planning left it.
 enum class RoomState {
   kComplete,     // its Eq 5 is below the stop percentage
-  kOpen,         // not complete, and the robot can stand in it
+  kOpen,         // not complete: the next scan is planned for it
   kUnreachable,  // the robot can stand nowhere in it (RoomStatus::why)
   kNotJudged,    // not looked at: the robot's room was still open
 };

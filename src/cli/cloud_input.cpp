@@ -82,8 +82,9 @@ PreparedCloud prepare_clouds(const CloudInput& in, const PreprocessParams& param
     out.scanners.emplace_back(p.x(), p.y(), p.z());
   }
   for (const auto& [points, rotation] : returns)
-    out.returns.push_back(return_directions(*points, out.pre.transform.linear() * rotation,
-                                            open_above_if(!out.pre.ceiling_found)));
+    out.returns.push_back(return_directions(
+        *points, out.pre.transform.linear() * rotation,
+        returns_options(limits ? *limits : ScannerView(), !out.pre.ceiling_found)));
   const auto& r = out.pre;
   char ceiling[64] = "";
   if (r.ceiling_found)
