@@ -180,7 +180,7 @@ inline DenseOcclusionReport study_occlusion_dense(DenseGrid& grid, const Scanner
   std::vector<DenseOcclusionReport> per_worker(threads);
   detail::parallel_for(std::size_t(ny * nz), threads, 16, [&](std::size_t row, unsigned worker) {
     const std::int64_t j = std::int64_t(row) % ny, k = std::int64_t(row) / ny;
-    DenseOcclusionReport& r = per_worker[worker];
+    DenseOcclusionReport r;  // this row's counts (the workers' totals share cache lines)
     for (std::int64_t i = 0; i < nx; ++i) {
       if (grid.label(i, j, k) == Label::kOccupied) {
         ++r.occupied;
@@ -196,6 +196,11 @@ inline DenseOcclusionReport study_occlusion_dense(DenseGrid& grid, const Scanner
       visible[grid.index(i, j, k)] = seen;
       ++(seen ? r.visible : r.occluded);
     }
+    DenseOcclusionReport& total = per_worker[worker];
+    total.visible += r.visible;
+    total.occluded += r.occluded;
+    total.occupied += r.occupied;
+    total.segments += r.segments;
   });
   for (std::int64_t k = 0; k < nz; ++k)
     for (std::int64_t j = 0; j < ny; ++j)
