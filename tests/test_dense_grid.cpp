@@ -136,6 +136,19 @@ TEST(DenseGrid, StudyAgreesWithBruteForceOnAWallWithAHole) {
   EXPECT_EQ(grid.label(i, j, k), Label::kEmpty);
 }
 
+TEST(DenseGrid, SegmentsFromOutsideTheGridAreTraversedToo) {
+  const DenseGrid grid = DenseGrid::from_cloud(wall_with_hole(), 0.78, kLeaf, 0.4);
+  const Point3 outside(-0.513, 0.407, 0.391);  // before the room's face at x = 0
+  EXPECT_TRUE(grid.segment_blocked(outside, {1.013, 0.102, 0.111}));   // through the wall
+  EXPECT_FALSE(grid.segment_blocked(outside, {1.013, 0.402, 0.411}));  // through the hole
+  for (double y = 0.01; y < 0.8; y += 0.07)
+    for (double z = 0.02; z < 0.8; z += 0.07) {
+      const Point3 b(1.11, y, z);
+      EXPECT_EQ(grid.segment_blocked(outside, b), blocked_brute_force(grid, outside, b))
+          << "to " << y << ", " << z;
+    }
+}
+
 TEST(DenseGrid, StudyKeepsToTheScannersLimits) {
   DenseGrid grid = DenseGrid::from_cloud(wall_with_hole(), 0.78, kLeaf, 0.4);
   ScannerView view = open_view();

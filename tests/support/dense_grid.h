@@ -137,15 +137,23 @@ class DenseGrid {
         t_delta[axis] = t_next[axis] = std::numeric_limits<double>::infinity();
       }
     }
+    // A segment with both ends in the grid stays in it (a box is convex): its voxels are
+    // read by a flat index stepped along, without bounds checks.
+    const bool contained = inside(c[0], c[1], c[2]) && inside(end[0], end[1], end[2]);
+    const std::int64_t stride[3] = {1, size_[0], std::int64_t(size_[0]) * size_[1]};
+    std::int64_t at = contained ? std::int64_t(index(c[0], c[1], c[2])) : 0;
+    const std::uint8_t occupied_label = static_cast<std::uint8_t>(Label::kOccupied);
     while (!(c[0] == end[0] && c[1] == end[1] && c[2] == end[2])) {
       const int axis =
           t_next[0] < t_next[1] ? (t_next[0] < t_next[2] ? 0 : 2) : (t_next[1] < t_next[2] ? 1 : 2);
       // A voxel entered at the very end only touches b: it hides nothing.
       if (t_next[axis] >= 1.0 - kEndTolerance) return false;
       c[axis] += step[axis];
+      at += step[axis] * stride[axis];
       t_next[axis] += t_delta[axis];
       if (c[0] == end[0] && c[1] == end[1] && c[2] == end[2]) return false;
-      if (occupied(c[0], c[1], c[2])) return true;
+      if (contained ? labels_[std::size_t(at)] == occupied_label : occupied(c[0], c[1], c[2]))
+        return true;
     }
     return false;
   }
