@@ -53,6 +53,11 @@ struct SideSeconds {
   double all_threads = -1;
 };
 
+// Seconds, or null for a side not timed (≤ 0).
+inline nlohmann::ordered_json seconds_or_null(double seconds) {
+  return seconds > 0 ? nlohmann::ordered_json(seconds) : nlohmann::ordered_json(nullptr);
+}
+
 // baseline / ours, or null when a side was not timed (≤ 0).
 inline nlohmann::ordered_json ratio(double baseline_seconds, double our_seconds) {
   if (!(baseline_seconds > 0) || !(our_seconds > 0)) return nullptr;
@@ -72,15 +77,11 @@ inline nlohmann::ordered_json headline(const std::string& name, const std::strin
   h["compares"] = compares;
   h["threads"] = all_threads();
   h["ratio_1_thread"] = ratio(baseline.one_thread, ours.one_thread);
-  const double baseline_all = baseline.all_threads > 0 ? baseline.all_threads : -1;
-  h["ratio_all_threads"] = ratio(baseline_all, ours.all_threads);
-  h["baseline_seconds"] = {{"1_thread", baseline.one_thread},
-                           {"all_threads", baseline_all > 0 ? nlohmann::ordered_json(baseline_all)
-                                                            : nlohmann::ordered_json(nullptr)}};
-  h["ours_seconds"] = {
-      {"1_thread", ours.one_thread},
-      {"all_threads", ours.all_threads > 0 ? nlohmann::ordered_json(ours.all_threads)
-                                           : nlohmann::ordered_json(nullptr)}};
+  h["ratio_all_threads"] = ratio(baseline.all_threads, ours.all_threads);
+  h["baseline_seconds"] = {{"1_thread", seconds_or_null(baseline.one_thread)},
+                           {"all_threads", seconds_or_null(baseline.all_threads)}};
+  h["ours_seconds"] = {{"1_thread", seconds_or_null(ours.one_thread)},
+                       {"all_threads", seconds_or_null(ours.all_threads)}};
   if (!note.empty()) h["note"] = note;
   return h;
 }
