@@ -8,8 +8,9 @@
 #   tests/run_benchmarks.sh [--build DIR] [--out FILE] [--quick]
 #
 # The arguments keep the whole set under about 10 minutes on a 2-core machine (bench_floor
-# runs 3 scans of its 60 × 45 m floor instead of 30); --quick runs each with the smallest
-# arguments, to check that the set runs (its figures mean nothing).
+# runs 3 scans of its 60 × 45 m floor instead of 30, bench_global_registration 8 lab
+# pairs, bench_nbv's subset 8 candidates); --quick runs each with the smallest arguments,
+# to check that the set runs (its figures mean nothing).
 set -euo pipefail
 
 source_dir=$(cd "$(dirname "$0")/.." && pwd)
@@ -22,7 +23,7 @@ while (($#)); do
     --out) out=$2; shift 2 ;;
     --quick) quick=1; shift ;;
     -h | --help)
-      sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'
+      sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'
       exit 0 ;;
     *) echo "run_benchmarks.sh: unknown argument $1 (see --help)" >&2; exit 2 ;;
   esac
