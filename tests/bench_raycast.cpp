@@ -1,5 +1,6 @@
 // Rays per second of the synthetic scanner on the lab scene at 0.1° x 0.1° (about 5.4 M
-// rays per scan), with 1 and 2 threads. A benchmark, not a test: run it in Release.
+// rays per scan), with 1 thread and with all threads (one per hardware thread). A benchmark,
+// not a test: run it in Release.
 //   bench_raycast [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
 
@@ -9,6 +10,7 @@
 #include "semioctree/sim/raycaster.h"
 #include "semioctree/sim/scanner.h"
 #include "semioctree/sim/scene.h"
+#include "support/bench_common.h"
 
 namespace {
 
@@ -44,7 +46,13 @@ void BM_ScanLab(benchmark::State& state) {
   state.counters["rays/s/thread"] = benchmark::Counter(
       static_cast<double>(rays) / static_cast<double>(state.range(0)), benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_ScanLab)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+BENCHMARK(BM_ScanLab)
+    ->Apply([](benchmark::internal::Benchmark* b) {
+      for (unsigned threads : semioctree::bench::thread_counts()) b->Arg(int(threads));
+    })
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(2.0);
 
 // The ray caster alone, one row of 3600 rays at a time as the scanner calls it.
 void BM_IntersectRows(benchmark::State& state) {

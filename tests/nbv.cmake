@@ -14,9 +14,6 @@ if(TARGET semioctree_sim)
   target_link_libraries(test_nbv PRIVATE semioctree_sim)
   target_compile_definitions(test_nbv PRIVATE SEMIOCTREE_HAVE_SIM=1)
   semioctree_add_bench(bench_nbv SOURCES bench_nbv.cpp LIBS semioctree semioctree_sim)
-  if(TARGET bench_nbv)  # it counts threads and tests limits as the scorer does (src/)
-    target_include_directories(bench_nbv PRIVATE ${PROJECT_SOURCE_DIR})
-  endif()
 endif()
 # map-nbv on maps built as OctoMap users build them (sparse scans of generated and built-in
 # scenes along a path, insertPointCloud, the floor shifted), judged against the scenes.

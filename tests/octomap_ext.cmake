@@ -4,7 +4,10 @@ foreach(t test_semioctree test_traversal test_file_io test_export test_packed_ke
   semioctree_add_test(${t} SOURCES ${t}.cpp LIBS octomap_ext)
   target_include_directories(${t} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
 endforeach()
-semioctree_add_bench(bench_traversal SOURCES bench_traversal.cpp LIBS octomap_ext)
+# Its default map is the classified lab, scanned with the synthetic scanner.
+if(TARGET semioctree_sim)
+  semioctree_add_bench(bench_traversal SOURCES bench_traversal.cpp LIBS semioctree semioctree_sim)
+endif()
 
 # The command-line tool (runs the built binary).
 semioctree_add_test(test_cli SOURCES test_cli.cpp LIBS semioctree nlohmann_json::nlohmann_json)

@@ -22,6 +22,10 @@ endif()
 if(TARGET semioctree_sim)
   semioctree_add_bench(bench_occlusion SOURCES bench_occlusion.cpp LIBS semioctree semioctree_sim)
 endif()
+# The dense-array homogeneous grid, a baseline of the benchmarks (support/dense_grid.h; it
+# shares the worker pool and the scanner's limits of src/).
+semioctree_add_test(test_dense_grid SOURCES test_dense_grid.cpp LIBS semioctree)
+target_include_directories(test_dense_grid PRIVATE ${CMAKE_CURRENT_SOURCE_DIR} ${PROJECT_SOURCE_DIR})
 # The survey and nbv commands end to end (the survey needs the synthetic scanner).
 if(TARGET semioctree_sim)
   semioctree_add_test(test_survey SOURCES test_survey.cpp LIBS nlohmann_json::nlohmann_json COST 120)
