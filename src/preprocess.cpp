@@ -425,15 +425,15 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
       in_band[i] = true;
     }
   }
+  z = {};  // (levelled again below, to the same floats: freed before the cut cloud grows)
   Cloud::Ptr cut(new Cloud);
   cut->reserve(input.size() - r.floor.removed - r.ceiling.removed);
   for (std::size_t i = 0; i < input.size(); ++i) {
     if (in_band[i]) continue;
     pcl::PointXYZ v = pcl::transformPoint(input[i], rotate);
-    v.z = float(double(z[i]) + dz);
+    v.z = float(double(v.z) + dz);
     cut->push_back(v);
   }
-  z = {};
   cut->header = pcl::PCLHeader();
   cut->is_dense = true;
   // The room's height: given, the ceiling's, or the top of the points left.
