@@ -198,8 +198,9 @@ void add_nbv_command(CLI::App& app) {
                 "the scans were taken from the robot of --robot-radius and --scanner-height: "
                 "nothing but the robot stood within its radius, so a direction without returns "
                 "that its body holds up to --min-range met nothing within range (space seen, "
-                "not hidden). Without it (a tripod, or not known) every direction without "
-                "returns stays hidden");
+                "not hidden). Without it (a tripod, or not known) a direction without returns "
+                "stays hidden unless the hole in the returns it lies in has all its edge returns "
+                "at least twice --min-range away (a window, a door: docs/occlusion.md)");
   add_scanner_limit_options(*cmd, o->limits);
   cmd->callback([o] { run_nbv(*o); });
 }
