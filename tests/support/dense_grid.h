@@ -171,6 +171,10 @@ class DenseGrid {
 struct DenseOcclusionReport {
   std::size_t visible = 0, occluded = 0, occupied = 0;
   std::size_t segments = 0;  // segments traversed (voxels within the scanner's limits)
+  DenseOcclusionReport& operator+=(const DenseOcclusionReport& o) {
+    visible += o.visible, occluded += o.occluded, occupied += o.occupied, segments += o.segments;
+    return *this;
+  }
 };
 
 // The occlusion study of the dense grid from one scanner: every voxel that is not occupied
@@ -204,11 +208,7 @@ inline DenseOcclusionReport study_occlusion_dense(DenseGrid& grid, const Scanner
       visible[grid.index(i, j, k)] = seen;
       ++(seen ? r.visible : r.occluded);
     }
-    DenseOcclusionReport& total = per_worker[worker];
-    total.visible += r.visible;
-    total.occluded += r.occluded;
-    total.occupied += r.occupied;
-    total.segments += r.segments;
+    per_worker[worker] += r;
   });
   for (std::int64_t k = 0; k < nz; ++k)
     for (std::int64_t j = 0; j < ny; ++j)
@@ -216,12 +216,7 @@ inline DenseOcclusionReport study_occlusion_dense(DenseGrid& grid, const Scanner
         if (grid.label(i, j, k) != Label::kOccupied)
           grid.set_label(i, j, k, visible[grid.index(i, j, k)] ? Label::kEmpty : Label::kOccluded);
   DenseOcclusionReport total;
-  for (const DenseOcclusionReport& r : per_worker) {
-    total.visible += r.visible;
-    total.occluded += r.occluded;
-    total.occupied += r.occupied;
-    total.segments += r.segments;
-  }
+  for (const DenseOcclusionReport& r : per_worker) total += r;
   return total;
 }
 
