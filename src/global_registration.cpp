@@ -33,7 +33,7 @@ SurfaceFacing facing_at(const SurfaceFacing* facing, const Eigen::Isometry3d& pl
 constexpr double kDeg = 180.0 / M_PI;
 
 // The (x, y) of the points on vertical surfaces: the cloud thinned to `spacing`
-// (PCL UniformSampling), normals by PCL from the neighbours within 2.5 spacings.
+// (decimate), normals by PCL from the neighbours within 2.5 spacings.
 std::vector<Eigen::Vector2d> vertical_surface_points(const Cloud& in, double spacing,
                                                      double max_normal_z) {
   const Cloud::Ptr thin = decimate(in, spacing);

@@ -12,11 +12,10 @@
 #include <cstdint>
 #include <limits>
 #include <map>
-#include <numeric>
-#include <random>
 #include <set>
 #include <tuple>
 
+#include "random_subset.h"
 #include "scanner_limits.h"
 
 namespace semioctree {
@@ -433,22 +432,14 @@ std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceili
   seg.setEpsAngle(p.max_normal_tilt_deg * M_PI / 180.0);
   seg.setDistanceThreshold(p.ransac_distance);
   seg.setMaxIterations(p.ransac_iterations);
-  std::mt19937 rng(20240505);
+  constexpr std::uint64_t kSampleSeed = 20240505;
 
   const Point3& s0 = scanner_positions.front();
   for (int round = 0; round < p.max_planes && remaining->size() >= p.min_plane_points; ++round) {
     // RANSAC on a random subset: the big planes are found as well and the cost
     // does not grow with the cloud.
-    Cloud::Ptr sample(new Cloud);
-    if (remaining->size() > p.ransac_sample) {
-      std::vector<int> idx(remaining->size());
-      std::iota(idx.begin(), idx.end(), 0);
-      std::shuffle(idx.begin(), idx.end(), rng);
-      sample->reserve(p.ransac_sample);
-      for (std::size_t i = 0; i < p.ransac_sample; ++i) sample->push_back((*remaining)[idx[i]]);
-    } else {
-      *sample = *remaining;
-    }
+    const Cloud::Ptr sample =
+        detail::random_subset(*remaining, p.ransac_sample, kSampleSeed + std::uint64_t(round));
     pcl::PointIndices inliers;
     pcl::ModelCoefficients coeffs;
     seg.setInputCloud(sample);

@@ -2,7 +2,6 @@
 
 #include <pcl/common/centroid.h>
 #include <pcl/common/transforms.h>
-#include <pcl/filters/uniform_sampling.h>
 #include <pcl/sample_consensus/method_types.h>
 #include <pcl/sample_consensus/model_types.h>
 #include <pcl/segmentation/sac_segmentation.h>
@@ -14,15 +13,26 @@
 #include <limits>
 #include <numeric>
 #include <optional>
-#include <random>
 #include <sstream>
 #include <vector>
 
+#include "random_subset.h"
 #include "semioctree/octomap_ext/packed_key_map.h"
 
 namespace semioctree {
 
 namespace {
+
+bool finite(const pcl::PointXYZ& q) {
+  return std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z);
+}
+
+// The world-aligned cell of side 1 / inv holding q (finite), packed (decimate, count_cells and
+// the RANSAC's spread share it, so that a count is the count of what decimate keeps).
+std::uint64_t cell_key(const pcl::PointXYZ& q, double inv) {
+  auto part = [inv](float v) { return std::uint64_t(std::int64_t(std::floor(double(v) * inv))); };
+  return pack_cell_parts(part(q.x), part(q.y), part(q.z));
+}
 
 struct HorizontalPlane {
   Eigen::Vector3d normal;   // oriented to +z
@@ -38,26 +48,7 @@ struct HorizontalPlane {
 
 // `count` points of `cloud` drawn at random (all of them if it has no more).
 Cloud::Ptr random_subset(const Cloud& cloud, std::size_t count) {
-  Cloud::Ptr out(new Cloud);
-  if (cloud.size() <= count) {
-    *out = cloud;
-    return out;
-  }
-  // 32-bit indices where they suffice: half the memory for a scan of millions of points;
-  // std::shuffle draws the same permutation whatever the index type.
-  auto draw = [&](auto first_index) {
-    std::mt19937 rng(12345);
-    std::vector<decltype(first_index)> idx(cloud.size());
-    std::iota(idx.begin(), idx.end(), first_index);
-    std::shuffle(idx.begin(), idx.end(), rng);
-    out->reserve(count);
-    for (std::size_t i = 0; i < count; ++i) out->push_back(cloud[idx[i]]);
-  };
-  if (cloud.size() <= std::numeric_limits<std::uint32_t>::max())
-    draw(std::uint32_t{0});
-  else
-    draw(std::size_t{0});
-  return out;
+  return detail::random_subset(cloud, count, 12345);
 }
 
 // The points RANSAC searches the first plane among: one per cube whose side is the
@@ -72,10 +63,9 @@ Cloud::Ptr area_uniform_subset(const Cloud& input, const PreprocessParams& p) {
   Cloud spread;
   const double inv = 1.0 / (2.0 * p.ransac_distance);
   PackedKeyMap<std::uint8_t> cubes(std::min<std::size_t>(input.size(), 4 * p.ransac_sample));
-  auto cube = [inv](float v) { return std::uint64_t(std::int64_t(std::floor(double(v) * inv))); };
   for (const auto& q : input) {
-    if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z)) continue;
-    if (cubes.insert(pack_cell_parts(cube(q.x), cube(q.y), cube(q.z)))) spread.push_back(q);
+    if (!finite(q)) continue;
+    if (cubes.insert(cell_key(q, inv))) spread.push_back(q);
   }
   return random_subset(spread, p.ransac_sample);
 }
@@ -203,12 +193,19 @@ Eigen::Vector3d refine_normal(const Cloud& cloud, const HorizontalPlane& plane, 
 
 // Mean and σ of the z values near `guess`, re-centred a few times (a Gaussian
 // fitted to one peak of the z histogram by its moments).
-HeightPeak fit_peak(const std::vector<float>& z, double guess, const PreprocessParams& p) {
+HeightPeak fit_peak(const std::vector<float>& all_z, double guess, const PreprocessParams& p) {
   // Histogram mode within the search window first: the peak itself.
   const int nb = std::max(1, int(std::ceil(2 * p.peak_window / p.histogram_bin)));
   std::vector<std::size_t> hist(std::size_t(nb), 0);
   const double lo = guess - p.peak_window;
-  for (float v : z) {
+  // The heights near the guess (within `near` of it), in their order: each pass below
+  // reads these instead of all of a scan's millions while its window lies within them
+  // (always, on a peak), the same values in the same order, so the same sums.
+  const double near = 3 * p.peak_window;
+  std::vector<float> z;
+  for (float v : all_z) {
+    if (!(std::fabs(double(v) - guess) <= near)) continue;
+    z.push_back(v);
     const int b = int(std::floor((v - lo) / p.histogram_bin));
     if (b >= 0 && b < nb) ++hist[std::size_t(b)];
   }
@@ -219,7 +216,8 @@ HeightPeak fit_peak(const std::vector<float>& z, double guess, const PreprocessP
   for (int it = 0; it < 8; ++it) {
     double sum = 0, sum2 = 0;
     std::size_t n = 0;
-    for (float v : z) {
+    const bool within_near = std::fabs(peak.center - guess) + window < near - p.histogram_bin;
+    for (float v : within_near ? z : all_z) {
       const double dz = v - peak.center;
       if (std::fabs(dz) <= window) {
         sum += dz;
@@ -257,14 +255,12 @@ std::optional<double> top_of_points(const Cloud& cloud, double q) {
 std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap) {
   cap = std::max<std::size_t>(cap, 1);
   const double inv = 1.0 / spacing;
-  auto cell = [inv](float v) { return std::uint64_t(std::int64_t(std::floor(double(v) * inv))); };
-  auto key_of = [&](const pcl::PointXYZ& q) {
-    return pack_cell_parts(cell(q.x), cell(q.y), cell(q.z));
-  };
+  auto key_of = [inv](const pcl::PointXYZ& q) { return cell_key(q, inv); };
   std::size_t read = 0;
   {
     PackedKeyMap<std::uint8_t> cells(std::min(cloud.size(), cap + 1));
-    for (; read < cloud.size() && cells.size() <= cap; ++read) cells.insert(key_of(cloud[read]));
+    for (; read < cloud.size() && cells.size() <= cap; ++read)
+      if (finite(cloud[read])) cells.insert(key_of(cloud[read]));
     if (cells.size() <= cap) return cells.size();
   }
   const double estimate = double(cap) * double(cloud.size()) / double(read);
@@ -273,6 +269,7 @@ std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap) {
   for (std::uint64_t part = 0; part < parts; ++part) {
     PackedKeyMap<std::uint8_t> cells(cap);
     for (const pcl::PointXYZ& q : cloud) {
+      if (!finite(q)) continue;
       const std::uint64_t k = key_of(q);
       if ((k * 0x9E3779B97F4A7C15ull >> 32) % parts == part) cells.insert(k);
     }
@@ -281,22 +278,39 @@ std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap) {
   return count;
 }
 
-Cloud::Ptr decimate(const Cloud::ConstPtr& cloud, double spacing) {
+Cloud::Ptr decimate(const Cloud& cloud, double spacing) {
   Cloud::Ptr out(new Cloud);
-  if (spacing <= 0) {
-    *out = *cloud;
+  if (!(spacing > 0)) {
+    *out = cloud;
     return out;
   }
-  pcl::UniformSampling<pcl::PointXYZ> us;
-  us.setInputCloud(cloud);
-  us.setRadiusSearch(spacing);
-  us.filter(*out);
+  // Per cell, the index of its point in `out` and that point's squared distance from the
+  // cell's centre; a point nearer the centre replaces it (PCL's UniformSampling keeps the
+  // same points, at a third of the time: docs/data-flow.md, "Decimation").
+  const double inv = 1.0 / spacing;
+  PackedKeyMap<std::uint32_t> slot;
+  std::vector<float> offset2;
+  auto centre_offset2 = [&](const pcl::PointXYZ& q) {
+    auto d = [&](float v) {
+      const double t = double(v) * inv;
+      return t - std::floor(t) - 0.5;
+    };
+    return float(d(q.x) * d(q.x) + d(q.y) * d(q.y) + d(q.z) * d(q.z));
+  };
+  for (const pcl::PointXYZ& q : cloud) {
+    if (!finite(q)) continue;
+    const auto [index, added] = slot.try_emplace(cell_key(q, inv), std::uint32_t(out->size()));
+    const float o2 = centre_offset2(q);
+    if (added) {
+      out->push_back(q);
+      offset2.push_back(o2);
+    } else if (o2 < offset2[*index]) {
+      (*out)[*index] = q;
+      offset2[*index] = o2;
+    }
+  }
+  out->is_dense = true;
   return out;
-}
-
-Cloud::Ptr decimate(const Cloud& cloud, double spacing) {
-  // PCL's filters take a shared pointer; this one borrows `cloud` for the call (no copy).
-  return decimate(Cloud::ConstPtr(&cloud, [](const Cloud*) {}), spacing);
 }
 
 namespace {
@@ -459,13 +473,13 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
 
   // Decimation: a fixed spacing, or the spacing that gives about the target count.
   double spacing = p.min_spacing;
-  Cloud::Ptr decimated;
   if (p.target_points > 0 && cut->size() > p.target_points) {
-    // The spacing that leaves about the target: count the cells of a trial
-    // spacing (the partition PCL's UniformSampling keeps one point of) with a
-    // fast hash set, and update the spacing by the secant of log(count) over
-    // log(spacing) (≈ −2 for surfaces), then filter once with PCL. Aim 1 %
-    // under the target; accept 3 % under to exactly at it.
+    // The spacing that leaves about the target: count the cells of a trial spacing (the
+    // partition decimate keeps one point of) with a fast hash set, and update the spacing
+    // by the secant of log(count) over log(spacing) (≈ −2 for surfaces). Aim 1 % under
+    // the target; accept 3 % under to exactly at it, after at most kMaxCounts counts
+    // (docs/data-flow.md, "Decimation").
+    constexpr int kMaxCounts = 13;
     const double goal = 0.99 * double(p.target_points);
     const double target = double(p.target_points);
     // A table of at most twice the target at once (count_cells).
@@ -476,7 +490,7 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     // (synthetic) grids the count jumps with the cells' phase and the secant
     // may not settle, so the result is always a spacing that was counted.
     double best = c0 <= target ? s0 : 0, best_count = c0 <= target ? c0 : 0;
-    for (int it = 0; it < 12; ++it) {
+    for (int counts = 1; counts < kMaxCounts; ++counts) {
       const double c1 = double(count_cells(*cut, s1, cap));
       if (c1 <= target && c1 > best_count) best = s1, best_count = c1;
       if (c1 <= target && c1 >= 0.97 * target) break;
@@ -491,7 +505,7 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
       if (double(count_cells(*cut, s, cap)) <= target) best = s;
     spacing = best;
   }
-  if (!decimated) decimated = spacing > 0 ? decimate(Cloud::ConstPtr(cut), spacing) : cut;
+  const Cloud::Ptr decimated = spacing > 0 ? decimate(*cut, spacing) : cut;
   r.cloud = decimated;
   r.decimation_spacing = spacing;
   r.output_points = r.cloud->size();

@@ -19,6 +19,7 @@
 #include <sstream>
 #include <vector>
 
+#include "random_subset.h"
 #include "semioctree/timing.h"
 
 namespace semioctree {
@@ -128,6 +129,20 @@ Cloud::Ptr voxel_downsample(const Cloud& in, double leaf) {
   return out;
 }
 
+// The points of `cloud` inside the bounding box of `around` grown by `margin` on every side.
+Cloud::Ptr near_box(const Cloud& cloud, const Cloud& around, double margin) {
+  Eigen::Vector4f lo, hi;
+  pcl::getMinMax3D(around, lo, hi);
+  const Eigen::Array3f grow = Eigen::Array3f::Constant(float(margin));
+  const Eigen::Array3f low = lo.head<3>().array() - grow, high = hi.head<3>().array() + grow;
+  Cloud::Ptr out(new Cloud);
+  for (const auto& q : cloud) {
+    const Eigen::Array3f v = q.getArray3fMap();
+    if ((v >= low).all() && (v <= high).all()) out->push_back(q);
+  }
+  return out;
+}
+
 // Points shifted by −offset, as PointNormal (normals zero).
 CloudN::Ptr shifted(const Cloud& in, const Eigen::Vector3d& offset) {
   CloudN::Ptr out(new CloudN);
@@ -156,11 +171,15 @@ std::size_t estimate_normals(CloudN& cloud, const pcl::search::KdTree<PointN>& t
   std::vector<float> d2;
   std::size_t with_normal = 0;
   for (auto& q : cloud) {
-    const int found = tree.radiusSearch(q, radius, nn, d2, k);
+    // The k nearest, less those beyond the radius: the same neighbours as a radius search
+    // keeping k, and cheaper where the radius holds many more than k.
+    int found = tree.nearestKSearch(q, k, nn, d2);
+    while (found > 0 && d2[std::size_t(found - 1)] > radius * radius) --found;
+    nn.resize(std::size_t(found));
     if (found < 3) continue;
     Eigen::Matrix3f cov;
     Eigen::Vector4f centroid;
-    if (pcl::computeMeanAndCovarianceMatrix(cloud, nn, cov, centroid) < 3) continue;
+    if (pcl::computeMeanAndCovarianceMatrix(*tree.getInputCloud(), nn, cov, centroid) < 3) continue;
     float eigenvalue;
     Eigen::Vector3f n;
     pcl::eigen33(cov, eigenvalue, n);
@@ -193,10 +212,12 @@ std::vector<std::uint8_t> orient_target(CloudN& cloud, const Eigen::Vector3d& of
 }
 
 // Normals of `cloud` (estimate_normals within `radius`) turned towards `viewpoint`.
-void normals_facing(CloudN& cloud, double radius, const Eigen::Vector3f& viewpoint) {
+// `neighbours`: the cloud whose points the normals are fitted to (null: `cloud` itself).
+void normals_facing(CloudN& cloud, double radius, const Eigen::Vector3f& viewpoint,
+                    const CloudN::ConstPtr& neighbours = nullptr) {
   if (cloud.empty()) return;
   pcl::search::KdTree<PointN> tree;
-  tree.setInputCloud(pcl::make_shared<CloudN>(cloud));
+  tree.setInputCloud(neighbours ? neighbours : pcl::make_shared<CloudN>(cloud));
   estimate_normals(cloud, tree, radius);
   for (PointN& q : cloud) {
     const Eigen::Vector3f n = q.getNormalVector3fMap();
@@ -227,10 +248,11 @@ RegistrationResult register_scan(const Cloud& source, const Cloud& target,
                                  const RegistrationParams& p, const SurfaceFacing* facing) {
   const auto t0 = Clock::now();
   if (!(p.voxel > 0) || !(p.final_correspondence > 0) ||
-      !(p.max_correspondence >= p.final_correspondence) || p.max_iterations < 1)
+      !(p.max_correspondence >= p.final_correspondence) || p.max_iterations < 1 ||
+      p.icp_source_points < std::max<std::size_t>(p.min_points, 1))
     throw std::invalid_argument(
         "registration parameters: need voxel > 0, 0 < final_correspondence <= "
-        "max_correspondence and max_iterations >= 1");
+        "max_correspondence, max_iterations >= 1 and icp_source_points >= min_points");
   if (source.empty() || target.empty()) {
     std::ostringstream m;
     m << "cannot register: the " << (source.empty() ? "source" : "target") << " cloud is empty";
@@ -239,9 +261,18 @@ RegistrationResult register_scan(const Cloud& source, const Cloud& target,
 
   RegistrationResult r;
   const Cloud::Ptr src_ds = voxel_downsample(source, p.voxel);
-  const Cloud::Ptr tgt_ds = voxel_downsample(target, p.voxel);
+  const double reach = 2.0 * p.max_correspondence;
+  const Cloud::Ptr tgt_ds = voxel_downsample(*near_box(target, *src_ds, reach), p.voxel);
   r.source_points = src_ds->size();
   r.target_points = tgt_ds->size();
+  if (r.source_points >= p.min_points && r.target_points < p.min_points && !target.empty()) {
+    std::ostringstream m;
+    m << "registration failed: overlap 0 (bound " << p.min_overlap << "): only " << r.target_points
+      << " target points (after " << p.voxel << " m downsampling) lie within " << reach
+      << " m of the source's bounding box (need at least " << p.min_points
+      << "); the clouds do not overlap or the initial guess is too far off";
+    throw RegistrationError(m.str());
+  }
   if (r.source_points < p.min_points || r.target_points < p.min_points) {
     std::ostringstream m;
     m << "cannot register: too few points after " << p.voxel << " m downsampling ("
@@ -277,7 +308,22 @@ RegistrationResult register_scan(const Cloud& source, const Cloud& target,
     if (facing && facing->target_side) normals_facing(*cloud, 4.0 * voxel, viewpoint);
     return cloud;
   };
-  source_at(src, p.voxel);
+  // The source of a stage, with its normals: src_ds downsampled to `voxel` (src itself at
+  // p.voxel), coarser by √2 steps until it holds at most icp_source_points. The last one
+  // is kept for the next stage.
+  double last_voxel = 0;
+  CloudN::Ptr last;
+  auto icp_source = [&](double voxel) {
+    if (last && voxel == last_voxel) return last;
+    last_voxel = voxel;
+    if (voxel == p.voxel && src->size() <= p.icp_source_points) return last = source_at(src, voxel);
+    Cloud::Ptr sampled = voxel_downsample(*src_ds, voxel);
+    while (sampled->size() > p.icp_source_points) {
+      voxel *= std::sqrt(2.0);
+      sampled = voxel_downsample(*src_ds, voxel);
+    }
+    return last = source_at(shifted(*sampled, offset), voxel);
+  };
 
   Icp icp;
   if (p.planar) {
@@ -314,11 +360,9 @@ RegistrationResult register_scan(const Cloud& source, const Cloud& target,
     // The coarse stages need no fine sampling of the source: a voxel of a
     // quarter of the correspondence distance is plenty, and makes the first
     // stage, where most iterations happen, several times cheaper.
+    // Past p.icp_source_points, the source is sampled coarser still (icp_source).
     const double stage_voxel = d / 4.0;
-    icp.setInputSource(
-        stage_voxel > 1.2 * p.voxel
-            ? source_at(shifted(*voxel_downsample(*src_ds, stage_voxel), offset), stage_voxel)
-            : src);
+    icp.setInputSource(icp_source(stage_voxel > 1.2 * p.voxel ? stage_voxel : p.voxel));
     icp.setMaxCorrespondenceDistance(d);
     tree->set_bound(d * 1.0001);
     CloudN aligned;
@@ -338,12 +382,21 @@ RegistrationResult register_scan(const Cloud& source, const Cloud& target,
         icp.getConvergeCriteria()->getConvergenceState() !=
         pcl::registration::DefaultConvergenceCriteria<double>::CONVERGENCE_CRITERIA_ITERATIONS;
   }
+  // Fitness and overlap over the final correspondence distance, of the source points
+  // (downsampled to p.voxel, as the bounds assume; a random icp_source_points of them if
+  // more, normals from all: the means are the same) against every downsampled target
+  // point (PCL's getFitnessScore, plus the inlier share; with the facing known, on
+  // surfaces facing the same way).
+  CloudN::Ptr checked = src;
+  if (src->size() > p.icp_source_points) {
+    checked = detail::random_subset(*src, p.icp_source_points, 4321);
+    if (facing && facing->target_side) normals_facing(*checked, 4.0 * p.voxel, viewpoint, src);
+  } else {
+    checked = icp_source(p.voxel);  // src, with its normals
+  }
   CloudN aligned;
-  pcl::transformPointCloudWithNormals(*src, aligned, estimate);
+  pcl::transformPointCloudWithNormals(*checked, aligned, estimate);
 
-  // Fitness and overlap over the final correspondence distance, against every
-  // downsampled target point (PCL's getFitnessScore, plus the inlier share; with the
-  // facing known, on surfaces facing the same way).
   pcl::Indices nn(1);
   std::vector<float> d2(1);
   const double max_d2 = p.final_correspondence * p.final_correspondence;

@@ -542,8 +542,8 @@ std::string html_page(const json& survey, const fs::path& dir) {
     h << "</td><td class=\"n\">";
     if (s.contains("seconds")) {
       const json& t = s["seconds"];
-      const double map =
-          number_or(t, "occupancy", 0) + number_or(t, "openings", 0) + number_or(t, "occlusion", 0);
+      const double map = number_or(t, "returns", 0) + number_or(t, "occupancy", 0) +
+                         number_or(t, "openings", 0) + number_or(t, "occlusion", 0);
       char b[32];
       std::snprintf(b, sizeof b, "%.2f", map);
       if (has_number(t, "scan")) h << "scan " << e(num(t, "scan")) << "<br>";

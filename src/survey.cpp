@@ -92,20 +92,31 @@ std::optional<double> ScanRecord::stop_percent() const {
   return nbv.stop_percent;
 }
 
-NextScanChoice BestScorePolicy::choose(const ScanRecord& scan, const SurveyMap&) {
+NextScanChoice BestScorePolicy::choose(const ScanRecord& scan, const SurveyMap&,
+                                       const RegistrationSafe&) {
   if (!scan.nbv.best) throw std::logic_error("BestScorePolicy: no candidate to choose from");
   NextScanChoice choice;
   choice.position = scan.nbv.best->position;
   return choice;
 }
 
-NextScanChoice RandomCandidatePolicy::choose(const ScanRecord& scan, const SurveyMap&) {
+NextScanChoice RandomCandidatePolicy::choose(const ScanRecord& scan, const SurveyMap&,
+                                             const RegistrationSafe& safe) {
   const std::vector<NbvCandidate>& c = scan.nbv.candidates;
   if (c.empty()) throw std::logic_error("RandomCandidatePolicy: no candidate to choose from");
-  std::uniform_int_distribution<std::size_t> pick(0, c.size() - 1);
-  NextScanChoice choice;
-  choice.position = c[pick(rng_)].position;
-  return choice;
+  // The candidates in a random order (a step of a Fisher-Yates shuffle per draw), up to
+  // the first safe one.
+  std::vector<std::size_t> order(c.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    std::swap(order[i], order[std::uniform_int_distribution<std::size_t>(i, c.size() - 1)(rng_)]);
+    if (!safe || safe(c[order[i]])) {
+      NextScanChoice choice;
+      choice.position = c[order[i]].position;
+      return choice;
+    }
+  }
+  throw std::logic_error("RandomCandidatePolicy: no candidate is registration-safe");
 }
 
 Survey::Survey(const SurveyParams& params, SurveyObserver* observer)
@@ -316,8 +327,11 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
     returns.map = &map_.tree();
     returns.optical_centre = scanner;
   }
-  rec.update = map_.add_scan(*registered, scanner, pre.ceiling_height,
-                             return_directions(*seen, rec.scanner_to_survey.linear(), returns));
+  t0 = Clock::now();
+  std::shared_ptr<const ReturnDirections> seen_directions =
+      return_directions(*seen, rec.scanner_to_survey.linear(), returns);
+  rec.seconds.returns = seconds_since(t0);
+  rec.update = map_.add_scan(*registered, scanner, pre.ceiling_height, std::move(seen_directions));
   rec.seconds.occupancy = rec.update.seconds_occupancy;
   rec.seconds.openings = rec.update.seconds_openings;
   rec.seconds.occlusion = rec.update.seconds_occlusion;
@@ -794,7 +808,20 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
       return out;
     }
     if (i == params_.max_scans) break;
-    const NextScanChoice next = policy.choose(rec, map_);
+    // The overlap predicted for each candidate a policy asks about, kept for the one chosen.
+    const NbvParams nbv = nbv_params();
+    std::map<std::pair<double, double>, double> overlap_at;
+    auto overlap_of = [&](const NbvCandidate& c) {
+      if (c.predicted_overlap) return *c.predicted_overlap;
+      const auto key = std::make_pair(c.position.x, c.position.y);
+      const auto it = overlap_at.find(key);
+      return it != overlap_at.end() ? it->second
+                                    : overlap_at[key] = predicted_overlap_at(c.position);
+    };
+    const RegistrationSafe safe = [&](const NbvCandidate& c) {
+      return !nbv.overlap_top || overlap_of(c) >= nbv.min_overlap;
+    };
+    const NextScanChoice next = policy.choose(rec, map_, safe);
     // The chosen candidate's prediction (the NBV's was made while choosing it) and path.
     const auto chosen = std::find_if(
         rec.nbv.candidates.begin(), rec.nbv.candidates.end(), [&](const NbvCandidate& c) {
@@ -812,8 +839,7 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
     }
     platform.move_to(next.position);
     target = next.position;
-    predicted = known && chosen->predicted_overlap ? *chosen->predicted_overlap
-                                                   : predicted_overlap_at(next.position);
+    predicted = known ? overlap_of(*chosen) : predicted_overlap_at(next.position);
     out.path_m += path.value_or(0.0);
     observer_->moved(rec, next, policy);
   }

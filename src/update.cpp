@@ -15,16 +15,23 @@ Cloud::Ptr within_limits(const Cloud::Ptr& scan, const ScannerView& limits, std:
   // Coordinates are floats: a return on a limit itself (the synthetic
   // scanner's lowest beam row) must survive the rounding.
   constexpr double kRangeTolerance = 1e-4, kElevationTolerance = 1e-3;  // m, degrees
+  // The elevation limits as limits of z / range, the sine of the elevation (increasing
+  // with it): no inverse sine per return.
+  auto sine_of = [](double deg) { return std::sin(std::clamp(deg, -90.0, 90.0) * M_PI / 180.0); };
+  const double sin_min = limits.elevation_min_deg - kElevationTolerance <= -90.0
+                             ? -2.0
+                             : sine_of(limits.elevation_min_deg - kElevationTolerance);
+  const double sin_max = limits.elevation_max_deg + kElevationTolerance >= 90.0
+                             ? 2.0
+                             : sine_of(limits.elevation_max_deg + kElevationTolerance);
   auto within = [&](const pcl::PointXYZ& p) {
     const double x = p.x, y = p.y, z = p.z;
     const double range = std::sqrt(x * x + y * y + z * z);
     if (range < limits.min_range - kRangeTolerance || range > limits.max_range + kRangeTolerance)
       return false;
     if (range > 0) {
-      const double elevation = std::asin(std::clamp(z / range, -1.0, 1.0)) * 180.0 / M_PI;
-      if (elevation < limits.elevation_min_deg - kElevationTolerance ||
-          elevation > limits.elevation_max_deg + kElevationTolerance)
-        return false;
+      const double sine = z / range;
+      if (sine < sin_min || sine > sin_max) return false;
     }
     return true;
   };

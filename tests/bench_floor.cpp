@@ -23,13 +23,13 @@
 #include <string>
 #include <tuple>
 
-#include "planning_options.h"
 #include "semioctree/sim/coverage.h"
 #include "semioctree/sim/ground_truth.h"
 #include "semioctree/sim/scene_generator.h"
 #include "semioctree/sim_platform/simulated_platform.h"
 #include "semioctree/survey.h"
 #include "semioctree/timing.h"
+#include "support/cli_survey_params.h"
 
 using namespace semioctree;
 using nlohmann::json;
@@ -151,12 +151,7 @@ int main(int argc, char** argv) {
                  reference_seconds, reference_mib, ref.visible.size(), ref.sample_count,
                  ref.sample_spacing);
 
-    SurveyParams p;
-    sim_platform::apply_scene(scene, p);
-    cli::PlanningOptions planning;  // the CLI's defaults
-    planning.threads = threads;
-    cli::apply_planning_options(planning, p);
-    p.max_scans = std::size_t(scans);
+    SurveyParams p = testing::cli_survey_params(scene, threads, std::size_t(scans));
     sim::CoverageAccumulator coverage(ref);
     sim_platform::SimulatedPlatform platform(
         scene, seed, threads, [&coverage](const Cloud& points, const Eigen::Isometry3d& to_world) {
@@ -173,6 +168,7 @@ int main(int argc, char** argv) {
     for (const ScanRecord& r : survey.records()) {
       per_scan.push_back({{"preprocess", r.seconds.preprocess},
                           {"registration", r.seconds.registration},
+                          {"returns", r.seconds.returns},
                           {"occupancy", r.seconds.occupancy},
                           {"openings", r.seconds.openings},
                           {"occlusion", r.seconds.occlusion},

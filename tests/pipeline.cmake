@@ -78,11 +78,16 @@ if(TARGET semioctree_sim_platform)
       set_tests_properties(generated_scenes generated_floor PROPERTIES DISABLED TRUE)
     endif()
   endif()
-  # A survey at floor scale (60 × 45 m): NBV seconds, reference seconds, peak memory.
-  semioctree_add_bench(bench_floor SOURCES bench_floor.cpp
-                       ${PROJECT_SOURCE_DIR}/src/cli/planning_options.cpp
-                       LIBS semioctree_sim_platform nlohmann_json::nlohmann_json)
-  if(TARGET bench_floor)
-    target_include_directories(bench_floor PRIVATE ${PROJECT_SOURCE_DIR}/src/cli)
-  endif()
+  # Benchmarks that run the survey stage with the CLI's planning defaults:
+  # bench_floor, a survey at floor scale (60 × 45 m: NBV seconds, reference seconds, peak
+  # memory); bench_update, the whole update of the map by each scan of a lab survey
+  # against OctoMap's insert of the same scans.
+  foreach(bench bench_floor bench_update)
+    semioctree_add_bench(${bench} SOURCES ${bench}.cpp
+                         ${PROJECT_SOURCE_DIR}/src/cli/planning_options.cpp
+                         LIBS semioctree_sim_platform nlohmann_json::nlohmann_json)
+    if(TARGET ${bench})
+      target_include_directories(${bench} PRIVATE ${PROJECT_SOURCE_DIR}/src/cli)
+    endif()
+  endforeach()
 endif()

@@ -7,6 +7,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <map>
 #include <set>
 #include <tuple>
 
@@ -164,7 +165,7 @@ TEST(Preprocess, DecimatesToSpacingOrTargetCount) {
   EXPECT_LE(r.output_points, 50000u);
   EXPECT_GE(r.output_points, 35000u);
   EXPECT_GT(r.decimation_spacing, 0.0);
-  // One point per cell of the spacing used (PCL UniformSampling's world-aligned cells).
+  // One point per cell of the spacing used (world-aligned cells).
   EXPECT_EQ(distinct_cells(*r.cloud, r.decimation_spacing), r.cloud->size());
   EXPECT_EQ(decimate(*r.cloud, r.decimation_spacing)->size(), r.cloud->size());
 
@@ -178,6 +179,42 @@ TEST(Preprocess, DecimatesToSpacingOrTargetCount) {
   EXPECT_EQ(distinct_cells(*m.cloud, 0.05), m.cloud->size());
   EXPECT_LT(m.output_points, m.after_cut / 10);  // 1 cm grid → 5 cm cells: ~1/25 on a plane
   EXPECT_GT(m.output_points, m.after_cut / 50);
+}
+
+// decimate keeps, of each cell, the point nearest its centre: checked against a plain
+// map of every cell's points, on a noisy room and with points outside the cells' grid.
+TEST(Preprocess, DecimateKeepsThePointNearestEachCellCentre) {
+  auto room = testing::synthetic_room(4, 3, 2.5, 0.013, 0.004);
+  room->push_back(pcl::PointXYZ{std::nanf(""), 0.f, 0.f});  // dropped
+  room->push_back(pcl::PointXYZ{-3.3f, 2.1f, 0.7f});        // alone in its cell
+  for (double spacing : {0.021, 0.05, 0.3}) {
+    std::map<std::tuple<long, long, long>, std::pair<double, pcl::PointXYZ>> nearest;
+    for (const auto& q : *room) {
+      if (!std::isfinite(q.x)) continue;
+      const double t[3] = {q.x / spacing, q.y / spacing, q.z / spacing};
+      double d2 = 0;
+      for (double v : t) d2 += (v - std::floor(v) - 0.5) * (v - std::floor(v) - 0.5);
+      const auto cell =
+          std::make_tuple(long(std::floor(t[0])), long(std::floor(t[1])), long(std::floor(t[2])));
+      auto it = nearest.find(cell);
+      if (it == nearest.end() || d2 < it->second.first - 1e-9) nearest[cell] = {d2, q};
+    }
+    const Cloud::Ptr kept = decimate(*room, spacing);
+    ASSERT_EQ(kept->size(), nearest.size()) << spacing;
+    std::size_t matched = 0;
+    for (const auto& q : *kept) {
+      const auto cell =
+          std::make_tuple(long(std::floor(q.x / spacing)), long(std::floor(q.y / spacing)),
+                          long(std::floor(q.z / spacing)));
+      const auto it = nearest.find(cell);
+      ASSERT_NE(it, nearest.end()) << spacing;
+      const pcl::PointXYZ& want = it->second.second;
+      matched += q.x == want.x && q.y == want.y && q.z == want.z;
+    }
+    // Ties within float rounding may pick another point of the cell; nearly all match.
+    EXPECT_GE(matched, kept->size() - kept->size() / 1000) << spacing;
+    EXPECT_EQ(count_cells(*room, spacing, room->size()), kept->size()) << spacing;
+  }
 }
 
 TEST(Preprocess, ClearErrors) {

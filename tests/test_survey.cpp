@@ -297,8 +297,8 @@ TEST(Survey, WritesEveryOutputWithTheDocumentedSchema) {
     EXPECT_EQ(s["ceiling_height_from"], "ceiling");
     EXPECT_NEAR(s["ceiling_height"].get<double>(), 2.8, 0.01);
     for (const char* k : {"x", "y", "z", "yaw_deg"}) EXPECT_TRUE(s["pose"].contains(k)) << k;
-    for (const char* k :
-         {"preprocess", "register", "occupancy", "openings", "occlusion", "nbv", "total"})
+    for (const char* k : {"preprocess", "register", "returns", "occupancy", "openings", "occlusion",
+                          "nbv", "total"})
       EXPECT_TRUE(s["seconds"].contains(k)) << k;
     for (const char* k : {"empty", "occupied", "occluded", "door", "window", "out"})
       EXPECT_TRUE(s["volume_percent"].contains(k)) << k;

@@ -9,7 +9,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -64,7 +66,8 @@ struct EventLog : SurveyObserver {
 // Takes the lowest-scoring candidate and remembers what it chose.
 struct WorstScorePolicy : NextScanPolicy {
   std::vector<Point3> chosen;
-  NextScanChoice choose(const ScanRecord& scan, const SurveyMap&) override {
+  NextScanChoice choose(const ScanRecord& scan, const SurveyMap&,
+                        const RegistrationSafe&) override {
     const NbvCandidate* worst = &scan.nbv.candidates.front();
     for (const NbvCandidate& c : scan.nbv.candidates)
       if (c.score < worst->score) worst = &c;
@@ -570,22 +573,43 @@ TEST(SurveyStage, ScopesAndRoomStatesHaveNames) {
   EXPECT_STREQ(to_string(RoomState::kUnreachable), "unreachable");
 }
 
-TEST(SurveyStage, RandomPolicyDrawsAmongTheCandidatesReproducibly) {
+TEST(SurveyStage, RandomPolicyDrawsAmongTheSafeCandidatesReproducibly) {
   ScanRecord r;
   for (int i = 0; i < 7; ++i)
     r.nbv.candidates.push_back({Point3(i, 2 * i, 1.5), double(i), 0.0, double(i), std::nullopt});
   const SurveyMap map{SurveyMapParams{}};
+  const RegistrationSafe any = [](const NbvCandidate&) { return true; };
   RandomCandidatePolicy a(5), b(5), c(6);
   bool differs = false;
-  for (int k = 0; k < 20; ++k) {
-    const Point3 pa = a.choose(r, map).position, pb = b.choose(r, map).position;
-    const Point3 pc = c.choose(r, map).position;
+  std::set<double> drawn;
+  for (int k = 0; k < 40; ++k) {
+    const Point3 pa = a.choose(r, map, any).position, pb = b.choose(r, map, any).position;
+    const Point3 pc = c.choose(r, map, any).position;
     EXPECT_EQ(pa.x, pb.x);
     EXPECT_EQ(pa.y, 2 * pa.x);  // one of the candidates
     differs = differs || pa.x != pc.x;
+    drawn.insert(pa.x);
   }
   EXPECT_TRUE(differs);
-  EXPECT_THROW(BestScorePolicy().choose(ScanRecord{}, map), std::logic_error);
+  EXPECT_GE(drawn.size(), 5u);  // uniform over 7: all but a couple within 40 draws
+  // Only the safe ones are drawn (the odd ones here), each of them in time, and a policy
+  // asks about each candidate at most once a choice.
+  std::set<double> safe_drawn;
+  for (int k = 0; k < 40; ++k) {
+    std::map<double, int> asked;
+    const RegistrationSafe odd = [&](const NbvCandidate& n) {
+      ++asked[n.position.x];
+      return int(n.position.x) % 2 == 1;
+    };
+    const double x = a.choose(r, map, odd).position.x;
+    EXPECT_EQ(int(x) % 2, 1) << x;
+    safe_drawn.insert(x);
+    for (const auto& [at, times] : asked) EXPECT_EQ(times, 1) << at;
+  }
+  EXPECT_EQ(safe_drawn, (std::set<double>{1, 3, 5}));
+  const RegistrationSafe none = [](const NbvCandidate&) { return false; };
+  EXPECT_THROW(a.choose(r, map, none), std::logic_error);
+  EXPECT_THROW(BestScorePolicy().choose(ScanRecord{}, map, any), std::logic_error);
 }
 
 // The office floor's first scan, at the west end of its 30 m corridor: far down it the

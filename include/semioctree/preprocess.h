@@ -83,15 +83,14 @@ class PreprocessError : public std::runtime_error {
 // floor), a given height nor a point above the floor.
 PreprocessResult preprocess(const Cloud& input, const PreprocessParams& params = {});
 
-// Decimates to a minimum spacing (PCL UniformSampling: one original point per
-// cell of that size); exposed for reuse and tests. Both forms read the cloud in place
-// (the second lends it to PCL for the call, without a copy).
-Cloud::Ptr decimate(const Cloud::ConstPtr& cloud, double spacing);
+// Decimates to a minimum spacing: one original point per world-aligned cell of that
+// size, the one nearest the cell's centre (as PCL's UniformSampling keeps), in the order
+// the cells are first met; non-finite points are dropped.
+Cloud::Ptr decimate(const Cloud& cloud, double spacing);
 // Number of cells of side `spacing` (world-aligned, as decimate's) holding a point of
 // `cloud`, exactly, with tables of about `cap` keys at most: beyond that (a spacing much
 // finer than the points' on a scan of millions) the keys are split by their hash and
-// counted part by part, one pass over the points a part.
+// counted part by part, one pass over the points a part. Non-finite points are skipped.
 std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap);
-Cloud::Ptr decimate(const Cloud& cloud, double spacing);
 
 }  // namespace semioctree

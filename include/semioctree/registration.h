@@ -39,6 +39,10 @@ struct RegistrationParams {
   // not levelled alike).
   bool planar = true;
   std::size_t min_points = 100;  // fewer points in either cloud after downsampling: error
+  // ICP pairs at most this many source points an iteration (the source downsampled
+  // coarser until it fits); fitness and overlap are measured on the last stage's source
+  // (docs/registration.md, "What it costs").
+  std::size_t icp_source_points = 20000;
 };
 
 struct RegistrationResult {
@@ -71,7 +75,9 @@ struct SurfaceFacing {
 };
 
 // `source` is already placed by the initial guess (odometry) in the target's
-// frame. `facing` (may be null): pair only surfaces that face the same way. Throws
+// frame; only the target's points within 2 · max_correspondence of the source's bounding
+// box take part (ICP cannot bring the source further). `facing` (may be null): pair only
+// surfaces that face the same way. Throws
 // RegistrationError (the message gives fitness, overlap and the bounds) when the
 // result fails the bounds, when ICP finds no correspondences, or when either cloud
 // is empty or too small; std::invalid_argument for inconsistent parameters.

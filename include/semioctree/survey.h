@@ -151,9 +151,11 @@ struct ScanRecord {
   // Survey::run: that path itself (RouteTree::route_to: the robot's cell, its turns, the
   // scan's cell); empty for the first scan.
   std::vector<Point3> route;
+  // Wall seconds of the stages; `returns`: the directions of the scan's returns
+  // (return_directions, read from the scan before its decimation).
   struct Seconds {
-    double preprocess = 0, registration = 0, occupancy = 0, openings = 0, occlusion = 0, nbv = 0,
-           total = 0;
+    double preprocess = 0, registration = 0, returns = 0, occupancy = 0, openings = 0,
+           occlusion = 0, nbv = 0, total = 0;
   } seconds;
 
   Point3 scanner() const;  // the optical centre, survey frame
@@ -174,27 +176,38 @@ struct NextScanChoice {
   std::optional<double> predicted_gain_percent;
 };
 
+// Whether a scan at a candidate could be registered: the overlap with the map predicted
+// for it (NbvCandidate::predicted_overlap, or predict_overlap as the NBV predicts it) is at
+// least the survey's minimum (NbvParams::min_overlap). The NBV's own best passed it.
+using RegistrationSafe = std::function<bool(const NbvCandidate&)>;
+
 // Chooses the next scan position among the feasible, scored candidates.
 class NextScanPolicy {
  public:
   virtual ~NextScanPolicy() = default;
-  // `scan.nbv.candidates` is not empty when this is called.
-  virtual NextScanChoice choose(const ScanRecord& scan, const SurveyMap& map) = 0;
+  // `scan.nbv.candidates` is not empty when this is called; at least one of them is
+  // `safe` (the NBV's best). A policy chooses among the safe ones, so that policies
+  // compared differ in their choice, not in how often their scans fail to register.
+  virtual NextScanChoice choose(const ScanRecord& scan, const SurveyMap& map,
+                                const RegistrationSafe& safe) = 0;
   virtual const char* what() const = 0;  // a noun for messages: "NBV", ...
 };
 
 // The paper's policy: the best-scoring candidate (the NBV).
 class BestScorePolicy : public NextScanPolicy {
  public:
-  NextScanChoice choose(const ScanRecord& scan, const SurveyMap& map) override;
+  NextScanChoice choose(const ScanRecord& scan, const SurveyMap& map,
+                        const RegistrationSafe& safe) override;
   const char* what() const override { return "NBV"; }
 };
 
-// The baseline: a feasible candidate drawn uniformly (mt19937_64 seeded with `seed`).
+// The baseline: a safe candidate drawn uniformly (mt19937_64 seeded with `seed`): the
+// candidates in a random order, the first safe one.
 class RandomCandidatePolicy : public NextScanPolicy {
  public:
   explicit RandomCandidatePolicy(std::uint64_t seed) : rng_(seed) {}
-  NextScanChoice choose(const ScanRecord& scan, const SurveyMap& map) override;
+  NextScanChoice choose(const ScanRecord& scan, const SurveyMap& map,
+                        const RegistrationSafe& safe) override;
   const char* what() const override { return "random candidate"; }
 
  private:

@@ -1,5 +1,6 @@
 #include "semioctree/sim_platform/simulated_platform.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -140,13 +141,13 @@ OraclePolicy::OraclePolicy(const SimulatedPlatform& platform,
                            std::function<void(std::size_t, std::size_t)> progress)
     : platform_(platform), covered_(covered), seed_(seed), progress_(std::move(progress)) {}
 
-NextScanChoice OraclePolicy::choose(const ScanRecord& scan, const SurveyMap&) {
+NextScanChoice OraclePolicy::choose(const ScanRecord& scan, const SurveyMap&,
+                                    const RegistrationSafe& safe) {
   const std::vector<NbvCandidate>& candidates = scan.nbv.candidates;
   if (candidates.empty()) throw std::logic_error("OraclePolicy: no candidate to choose from");
   const std::vector<bool>& have = covered_.covered();
   const double yaw_deg = platform_.robot().true_pose().yaw_deg;
-  NextScanChoice best;
-  std::size_t best_gain = 0;
+  std::vector<std::size_t> gain(candidates.size(), 0);
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     const Point3& p = candidates[c].position;
     const Eigen::Vector3d w = platform_.survey_to_world() * Eigen::Vector3d(p.x, p.y, 0.0);
@@ -156,14 +157,23 @@ NextScanChoice OraclePolicy::choose(const ScanRecord& scan, const SurveyMap&) {
     points.reserve(s.points.size());
     for (const Eigen::Vector3f& q : s.points) points.push_back(to_world * q);
     const std::vector<bool> got = covered_.flags_of(points);
-    std::size_t gain = 0;
-    for (std::size_t k = 0; k < got.size(); ++k) gain += got[k] && !have[k];
-    if (c == 0 || gain > best_gain) best_gain = gain, best.position = p;
+    for (std::size_t k = 0; k < got.size(); ++k) gain[c] += got[k] && !have[k];
     if (progress_ && ((c + 1) % 20 == 0 || c + 1 == candidates.size()))
       progress_(c + 1, candidates.size());
   }
+  // Largest gain first (candidate order on ties), the first safe one.
+  std::vector<std::size_t> order(candidates.size());
+  for (std::size_t c = 0; c < order.size(); ++c) order[c] = c;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return gain[a] > gain[b]; });
+  const auto first_safe = std::find_if(order.begin(), order.end(),
+                                       [&](std::size_t c) { return !safe || safe(candidates[c]); });
+  if (first_safe == order.end())
+    throw std::logic_error("OraclePolicy: no candidate is registration-safe");
+  NextScanChoice best;
+  best.position = candidates[*first_safe].position;
   best.predicted_gain_percent =
-      have.empty() ? 0.0 : 100.0 * double(best_gain) / double(have.size());
+      have.empty() ? 0.0 : 100.0 * double(gain[*first_safe]) / double(have.size());
   return best;
 }
 

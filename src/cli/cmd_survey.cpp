@@ -396,7 +396,9 @@ void add_survey_command(CLI::App& app) {
                   "candidate: the baseline the NBV is compared with) or oracle (the feasible "
                   "candidate whose scan adds the most reference surface, found by scanning "
                   "each one in the simulator: perfect knowledge, a yardstick for the NBV "
-                  "score; about a minute per scan on the lab)")
+                  "score; about a minute per scan on the lab); random and oracle choose, as "
+                  "the NBV does, among the candidates predicted to overlap the map by "
+                  "--min-overlap")
       ->check(CLI::IsMember({"nbv", "random", "oracle"}))
       ->capture_default_str();
   cmd->add_option("--start", o->start, "robot start X,Y in the scene (default: the scene's)")

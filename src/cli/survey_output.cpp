@@ -143,10 +143,12 @@ void SurveyOutput::stage_done(SurveyStage stage, const ScanRecord& s) {
     case SurveyStage::kMapped: {
       const ScanUpdateReport& up = s.update;
       std::printf(
-          "  map: %zu new coarse voxels, %zu occupied leaves [%.2f s]; %zu openings [%.2f s]; "
-          "occlusion %zu octants tested, %zu split, %zu segments [%.2f s]\n",
-          up.new_coarse_voxels, up.occupied_leaves, up.seconds_occupancy, up.openings_found,
-          up.seconds_openings, up.retest.octants_tested + up.new_space.octants_tested,
+          "  map: directions of the returns [%.2f s]; %zu new coarse voxels, %zu occupied leaves "
+          "[%.2f s]; %zu openings [%.2f s]; occlusion %zu octants tested, %zu split, %zu segments "
+          "[%.2f s]\n",
+          s.seconds.returns, up.new_coarse_voxels, up.occupied_leaves, up.seconds_occupancy,
+          up.openings_found, up.seconds_openings,
+          up.retest.octants_tested + up.new_space.octants_tested,
           up.retest.octants_split + up.new_space.octants_split,
           up.retest.segments + up.new_space.segments, up.seconds_occlusion);
       progress_ = std::make_unique<CountProgress>(stdout, "  nbv: scored", "candidates");
@@ -322,6 +324,7 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
   }
   r["seconds"] = {{"preprocess", s.seconds.preprocess},
                   {"register", s.seconds.registration},
+                  {"returns", s.seconds.returns},
                   {"occupancy", s.seconds.occupancy},
                   {"openings", s.seconds.openings},
                   {"occlusion", s.seconds.occlusion},

@@ -96,16 +96,18 @@ class SimulatedPlatform : public ScanPlatform {
 void add_to_coverage(sim::CoverageAccumulator& coverage, const Cloud& points,
                      const Eigen::Isometry3d& scanner_to_world);
 
-// The yardstick: scans every feasible candidate in the simulator and takes the one whose
-// points cover the most reference samples not covered yet (greedy, perfect knowledge,
-// among the planner's own candidates). `covered`: what the platform's placed scans have
-// covered so far (fed by its PlacedPoints).
+// The yardstick: scans every feasible candidate in the simulator and takes the safe one
+// whose points cover the most reference samples not covered yet (greedy, perfect
+// knowledge, among the planner's own candidates; the gains in decreasing order, up to the
+// first safe candidate). `covered`: what the platform's placed scans have covered so far
+// (fed by its PlacedPoints).
 class OraclePolicy : public NextScanPolicy {
  public:
   // `progress(scanned, candidates)` now and then, from the survey's thread.
   OraclePolicy(const SimulatedPlatform& platform, const sim::CoverageAccumulator& covered,
                std::uint64_t seed, std::function<void(std::size_t, std::size_t)> progress = {});
-  NextScanChoice choose(const ScanRecord& scan, const SurveyMap& map) override;
+  NextScanChoice choose(const ScanRecord& scan, const SurveyMap& map,
+                        const RegistrationSafe& safe) override;
   const char* what() const override { return "oracle's choice"; }
 
  private:
