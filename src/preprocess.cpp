@@ -278,39 +278,51 @@ std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap) {
   return count;
 }
 
-Cloud::Ptr decimate(const Cloud& cloud, double spacing) {
-  Cloud::Ptr out(new Cloud);
-  if (!(spacing > 0)) {
-    *out = cloud;
-    return out;
-  }
-  // Per cell, the index of its point in `out` and that point's squared distance from the
-  // cell's centre; a point nearer the centre replaces it (PCL's UniformSampling keeps the
-  // same points, at a third of the time: docs/data-flow.md, "Decimation").
-  const double inv = 1.0 / spacing;
-  PackedKeyMap<std::uint32_t> slot;
-  std::vector<float> offset2;
+CellThinning::CellThinning(double spacing) : inv_(1.0 / spacing), kept_(new Cloud) {
+  if (!(spacing > 0)) throw std::invalid_argument("CellThinning: the spacing must be > 0");
+  kept_->is_dense = true;
+}
+
+void CellThinning::add(const Cloud& points) {
+  // Per cell, the index of its point in kept_ and that point's squared distance from the
+  // cell's centre (in cells); a point nearer the centre replaces it (PCL's UniformSampling
+  // keeps the same points, at three times the time: docs/data-flow.md, "Decimation").
   auto centre_offset2 = [&](const pcl::PointXYZ& q) {
     auto d = [&](float v) {
-      const double t = double(v) * inv;
+      const double t = double(v) * inv_;
       return t - std::floor(t) - 0.5;
     };
     return float(d(q.x) * d(q.x) + d(q.y) * d(q.y) + d(q.z) * d(q.z));
   };
-  for (const pcl::PointXYZ& q : cloud) {
+  Cloud& kept = *kept_;
+  for (const pcl::PointXYZ& q : points) {
     if (!finite(q)) continue;
-    const auto [index, added] = slot.try_emplace(cell_key(q, inv), std::uint32_t(out->size()));
+    const auto [index, added] = slot_.try_emplace(cell_key(q, inv_), std::uint32_t(kept.size()));
     const float o2 = centre_offset2(q);
     if (added) {
-      out->push_back(q);
-      offset2.push_back(o2);
-    } else if (o2 < offset2[*index]) {
-      (*out)[*index] = q;
-      offset2[*index] = o2;
+      kept.push_back(q);
+      offset2_.push_back(o2);
+    } else if (o2 < offset2_[*index]) {
+      kept[*index] = q;
+      offset2_[*index] = o2;
     }
   }
-  out->is_dense = true;
+}
+
+Cloud::Ptr CellThinning::release() {
+  Cloud::Ptr out = std::move(kept_);
+  kept_.reset(new Cloud);
+  kept_->is_dense = true;
+  slot_.clear();
+  offset2_ = {};
   return out;
+}
+
+Cloud::Ptr decimate(const Cloud& cloud, double spacing) {
+  if (!(spacing > 0)) return Cloud::Ptr(new Cloud(cloud));
+  CellThinning thinning(spacing);
+  thinning.add(cloud);
+  return thinning.release();
 }
 
 namespace {

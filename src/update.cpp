@@ -190,20 +190,22 @@ ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,
   scanners_.push_back(scanner);
   returns_.push_back(std::move(returns));
   if (params_.merged_spacing > 0) {
-    // The union into a cloud of its exact size, the old one freed before decimating it.
-    Cloud both;
-    both.reserve(merged_->size() + points.size());
-    both += *merged_;
-    both += points;
+    // decimate(merged + points) without copying their union: the cells' table lives for
+    // this call only (a table kept from scan to scan saved 0.1 s a lab scan and raised
+    // the survey's peak memory by 50 MB), the old cloud is let go once read.
+    CellThinning thinning(params_.merged_spacing);
+    thinning.add(*merged_);
     merged_.reset();
-    merged_ = decimate(both, params_.merged_spacing);
+    thinning.add(points);
+    merged_ = thinning.release();
   } else {
     *merged_ += points;
   }
   rep.seconds_occupancy = seconds_since(t0);
 
   t0 = Clock::now();
-  openings_ = detect_openings(*merged_, ceiling_, *tree_, views(), params_.openings, &rep.openings);
+  openings_ =
+      detect_openings(merged_cloud(), ceiling_, *tree_, views(), params_.openings, &rep.openings);
   // The map's doors and windows are the openings found now: earlier labels go
   // (unknown: re-decided below) and the openings label their leaves afresh.
   relabel(*tree_, octants_labelled(*tree_, kOpeningLabels), Label::kUnknown);

@@ -45,8 +45,10 @@ full_args[bench_global_registration]="--pairs 8"
 quick_args[bench_global_registration]="--pairs 1"
 full_args[bench_floor]="--scans 3"
 quick_args[bench_floor]="--size 12x10 --scans 1"
+full_args[bench_update]="--scans 5"
+quick_args[bench_update]="--scans 1"
 order=(bench_traversal bench_discretize bench_occlusion bench_nbv bench_raycast
-  bench_global_registration bench_floor)
+  bench_global_registration bench_floor bench_update)
 
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT

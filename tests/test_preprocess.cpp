@@ -217,6 +217,28 @@ TEST(Preprocess, DecimateKeepsThePointNearestEachCellCentre) {
   }
 }
 
+// CellThinning, a cloud at a time, keeps what decimate keeps of them all at once: the
+// same points in the same order.
+TEST(Preprocess, ThinningCloudByCloudEqualsDecimatingTheirUnion) {
+  const auto a = testing::synthetic_room(5, 4, 2.6, 0.017, 0.003);
+  auto b = testing::synthetic_room(5, 4, 2.6, 0.023, 0.003);
+  for (auto& q : *b) q.x += 1.3f;  // overlaps a, and reaches past it
+  Cloud both = *a;
+  both += *b;
+  const Cloud::Ptr at_once = decimate(both, 0.04);
+  CellThinning thinning(0.04);
+  thinning.add(*a);
+  const std::size_t after_a = thinning.cloud().size();
+  thinning.add(*b);
+  ASSERT_EQ(thinning.cloud().size(), at_once->size());
+  EXPECT_GT(thinning.cloud().size(), after_a);
+  for (std::size_t i = 0; i < at_once->size(); ++i) {
+    const auto &p = thinning.cloud()[i], &q = (*at_once)[i];
+    ASSERT_TRUE(p.x == q.x && p.y == q.y && p.z == q.z) << i;
+  }
+  EXPECT_THROW(CellThinning(0.0), std::invalid_argument);
+}
+
 TEST(Preprocess, ClearErrors) {
   Cloud few;
   for (int i = 0; i < 10; ++i) few.push_back(pcl::PointXYZ{float(i), 0.f, 0.f});

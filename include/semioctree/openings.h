@@ -25,7 +25,11 @@ struct OpeningParams {
   double ransac_distance = 0.03;     // inlier distance to the plane, m
   double max_normal_tilt_deg = 5.0;  // a wall's normal is within this of horizontal
   int ransac_iterations = 500;
-  std::size_t ransac_sample = 60000;       // RANSAC runs on a random subset this large
+  // RANSAC runs on a random subset this large. Whether it finds a plane depends on the
+  // plane's share of the points (500 draws of 3 find a share of 0.15 with probability
+  // 0.82), not on the subset's size, which only sets how well the shares are counted:
+  // ±0.4 % (one standard error) at a share of 0.2 with 10 000 points.
+  std::size_t ransac_sample = 10000;
   std::size_t min_plane_points = 500;      // smaller planes end the search
   int max_planes = 20;                     // planes searched at most
   double min_wall_length = 1.5;            // a wall segment is at least this long, m

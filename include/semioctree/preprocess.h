@@ -13,9 +13,12 @@
 
 #include <Eigen/Geometry>
 #include <cstddef>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
+#include "semioctree/octomap_ext/packed_key_map.h"
 #include "semioctree/scan_io.h"
 
 namespace semioctree {
@@ -87,6 +90,28 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& params =
 // size, the one nearest the cell's centre (as PCL's UniformSampling keeps), in the order
 // the cells are first met; non-finite points are dropped.
 Cloud::Ptr decimate(const Cloud& cloud, double spacing);
+
+// decimate, a cloud at a time: after add(a), add(b), ... cloud() is decimate(a + b + ...)
+// (the same points in the same order), each add costing its own points only. Keeps the
+// cells' table (12 bytes a slot, a slot or two a point kept).
+class CellThinning {
+ public:
+  explicit CellThinning(double spacing);       // spacing > 0, else std::invalid_argument
+  CellThinning(const CellThinning&) = delete;  // (the kept cloud is not shared)
+  CellThinning& operator=(const CellThinning&) = delete;
+  CellThinning(CellThinning&&) = default;
+  CellThinning& operator=(CellThinning&&) = default;
+  void add(const Cloud& points);
+  const Cloud& cloud() const { return *kept_; }
+  Cloud::Ptr release();  // the kept cloud, handed over (the thinning is empty after)
+  double spacing() const { return 1.0 / inv_; }
+
+ private:
+  double inv_;
+  PackedKeyMap<std::uint32_t> slot_;  // cell → index of its point in kept_
+  std::vector<float> offset2_;        // per kept point: squared distance from its cell's centre
+  Cloud::Ptr kept_;
+};
 // Number of cells of side `spacing` (world-aligned, as decimate's) holding a point of
 // `cloud`, exactly, with tables of about `cap` keys at most: beyond that (a spacing much
 // finer than the points' on a scan of millions) the keys are split by their hash and

@@ -15,11 +15,13 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "semioctree/discretize.h"
 #include "semioctree/occlusion.h"
 #include "semioctree/openings.h"
+#include "semioctree/preprocess.h"
 
 namespace semioctree {
 
