@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "semioctree/nbv.h"
 #include "support/nbv_maps.h"
@@ -164,6 +165,59 @@ TEST(NbvOverlap, ARoomWithNothingLeftToSeeStillHasItsBest) {
   EXPECT_FALSE(r.best_overlap);
   EXPECT_EQ(r.low_overlap, 0u);
   EXPECT_EQ(r.stop_percent, 0.0);
+}
+
+// Predicting every candidate's overlap first and scoring only those predicted to register
+// (NbvParams::predict_first_factor) chooses what predicting after scoring chooses: the
+// same best, prediction and Eq 5, with fewer candidates scored; no best when none is safe;
+// the unpredicted best when nothing is left to see.
+TEST(NbvOverlap, PredictingFirstChoosesTheSameBest) {
+  Room room(true);
+  room.set(4.4, 2.4, 1.0, 2, Label::kOccluded);
+  room.leaves({3.6, 1.6, 0}, {3.65, 3.2, 2.4}, Label::kOccupied);
+  NbvParams p;
+  p.candidate_spacing = 0.4;
+  p.limits = all_round();
+  p.overlap_top = 2.4;
+  const Point3 robot(1.2, 2.4, 0);
+  const NbvResult free = next_best_view(room.t, RobotGeometry{}, robot, {}, p);
+  ASSERT_TRUE(free.best_overlap);
+  p.min_overlap = free.best_overlap->share + 0.02;
+  auto with_factor = [&](double factor) {
+    NbvParams q = p;
+    q.predict_first_factor = factor;
+    return next_best_view(room.t, RobotGeometry{}, robot, {}, q);
+  };
+  const NbvResult after = with_factor(std::numeric_limits<double>::infinity());
+  const NbvResult first = with_factor(0.0);
+  ASSERT_TRUE(after.best && first.best && after.best_overlap && first.best_overlap);
+  EXPECT_EQ(first.best->position.x, after.best->position.x);
+  EXPECT_EQ(first.best->position.y, after.best->position.y);
+  EXPECT_DOUBLE_EQ(first.best->score, after.best->score);
+  EXPECT_DOUBLE_EQ(first.best_overlap->share, after.best_overlap->share);
+  EXPECT_DOUBLE_EQ(first.stop_percent, after.stop_percent);
+  EXPECT_GE(first.low_overlap, after.low_overlap);
+  EXPECT_LT(first.scoring.segments, after.scoring.segments);
+  // Every candidate has its prediction, and only those predicted to register a score.
+  for (const NbvCandidate& c : first.candidates) {
+    ASSERT_TRUE(c.predicted_overlap);
+    if (*c.predicted_overlap < p.min_overlap) {
+      EXPECT_EQ(c.score, 0.0);
+    }
+  }
+  // Nothing reaches 101 %: no best either way.
+  p.min_overlap = 1.01;
+  EXPECT_FALSE(with_factor(0.0).best);
+  EXPECT_FALSE(with_factor(std::numeric_limits<double>::infinity()).best);
+  // Nothing left to see: the best scores 0 and is taken unpredicted either way.
+  Room empty(false);
+  NbvParams e = p;
+  e.predict_first_factor = 0.0;
+  const NbvResult done = next_best_view(empty.t, RobotGeometry{}, robot, {}, e);
+  ASSERT_TRUE(done.best);
+  EXPECT_EQ(done.best->score, 0.0);
+  EXPECT_FALSE(done.best_overlap);
+  EXPECT_EQ(done.low_overlap, 0u);
 }
 
 }  // namespace

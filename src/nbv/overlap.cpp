@@ -68,18 +68,45 @@ RayResult cast(const SemiOcTree& tree, const Point3& a, const Eigen::Vector3d& d
 
 }  // namespace
 
+namespace {
+// The rays of a prediction: rows of equal elevation, step_deg apart; each row's azimuths
+// step_deg apart on the sphere, so that every ray stands for about the same solid angle.
+struct RayRows {
+  double el_min = 0, step_deg = 1;
+  int rows = 1;
+  double elevation(int row) const {
+    return (el_min + (double(row) + 0.5) * step_deg) * M_PI / 180.0;
+  }
+  int azimuths(int row) const {
+    return std::max(1, static_cast<int>(std::lround(360.0 * std::cos(elevation(row)) / step_deg)));
+  }
+};
+RayRows ray_rows(const ScannerView& limits, double step_deg) {
+  RayRows g;
+  g.el_min = std::clamp(limits.elevation_min_deg, -90.0, 90.0);
+  const double el_max = std::clamp(limits.elevation_max_deg, -90.0, 90.0);
+  g.step_deg = step_deg;
+  g.rows = std::max(1, static_cast<int>(std::lround((el_max - g.el_min) / step_deg)));
+  return g;
+}
+}  // namespace
+
+std::size_t prediction_rays(const NbvParams& params) {
+  if (!(params.overlap_ray_step_deg > 0)) return 0;
+  const RayRows g = ray_rows(params.limits, params.overlap_ray_step_deg);
+  std::size_t n = 0;
+  for (int row = 0; row < g.rows; ++row) n += std::size_t(g.azimuths(row));
+  return n;
+}
+
 OverlapPrediction predict_overlap(const SemiOcTree& tree, const Point3& scanner,
                                   const ScannerView& limits, double floor_z, double top_z,
                                   double tolerance, double step_deg, unsigned threads) {
   if (!(step_deg > 0)) throw std::invalid_argument("predict_overlap: the ray step must be > 0");
   if (!(top_z > floor_z))
     throw std::invalid_argument("predict_overlap: the band's top must lie above its floor");
-  constexpr double kDeg = M_PI / 180.0;
-  const double el_min = std::clamp(limits.elevation_min_deg, -90.0, 90.0);
-  const double el_max = std::clamp(limits.elevation_max_deg, -90.0, 90.0);
-  // Rows of equal elevation, step_deg apart; each row's azimuths step_deg apart on the
-  // sphere, so that every ray stands for about the same solid angle.
-  const int rows = std::max(1, static_cast<int>(std::lround((el_max - el_min) / step_deg)));
+  const RayRows grid = ray_rows(limits, step_deg);
+  const int rows = grid.rows;
   struct RowSum {
     double mapped = 0, total = 0;
     std::size_t rays = 0, n_mapped = 0, n_unmapped = 0;
@@ -87,8 +114,8 @@ OverlapPrediction predict_overlap(const SemiOcTree& tree, const Point3& scanner,
   std::vector<RowSum> sums(static_cast<std::size_t>(rows));
   detail::parallel_for(
       sums.size(), detail::thread_count(threads), 1, [&](std::size_t row, unsigned) {
-        const double el = (el_min + (double(row) + 0.5) * step_deg) * kDeg;
-        const int n = std::max(1, static_cast<int>(std::lround(360.0 * std::cos(el) / step_deg)));
+        const double el = grid.elevation(int(row));
+        const int n = grid.azimuths(int(row));
         RowSum& s = sums[row];
         for (int i = 0; i < n; ++i) {
           const double az = (double(i) + 0.5) * 2 * M_PI / n;

@@ -45,5 +45,7 @@ OverlapPrediction predict_overlap(const SemiOcTree& tree, const Point3& scanner,
 // ray step, scanner limits and threads. Throws std::invalid_argument without overlap_top.
 OverlapPrediction predict_overlap(const SemiOcTree& tree, const Point3& scanner,
                                   const NbvParams& params);
+// The number of rays that prediction casts (0 for a step that is not > 0).
+std::size_t prediction_rays(const NbvParams& params);
 
 }  // namespace semioctree

@@ -55,6 +55,11 @@ struct NbvParams {
   std::optional<double> overlap_top;
   double min_overlap = 0;  // share, 0-1
   double overlap_ray_step_deg = 1.5;
+  // When the targets number at least this many times a prediction's rays, every
+  // candidate's overlap is predicted first and only those predicted to register are
+  // scored (the same NBV: docs/nbv.md, "Predicted first"); else after scoring, best
+  // first. 0: always first; infinity: never.
+  double predict_first_factor = 10;
   // The score against the robot's path (docs/nbv.md, "Travel"): candidates are ranked by
   // score · exp(−travel_weight · path) (NbvCandidate::value); 0 (1/m): by the score.
   double travel_weight = 0;
