@@ -255,12 +255,11 @@ std::optional<double> top_of_points(const Cloud& cloud, double q) {
 std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap) {
   cap = std::max<std::size_t>(cap, 1);
   const double inv = 1.0 / spacing;
-  auto key_of = [inv](const pcl::PointXYZ& q) { return cell_key(q, inv); };
   std::size_t read = 0;
   {
     PackedKeyMap<std::uint8_t> cells(std::min(cloud.size(), cap + 1));
     for (; read < cloud.size() && cells.size() <= cap; ++read)
-      if (finite(cloud[read])) cells.insert(key_of(cloud[read]));
+      if (finite(cloud[read])) cells.insert(cell_key(cloud[read], inv));
     if (cells.size() <= cap) return cells.size();
   }
   const double estimate = double(cap) * double(cloud.size()) / double(read);
@@ -270,7 +269,7 @@ std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap) {
     PackedKeyMap<std::uint8_t> cells(cap);
     for (const pcl::PointXYZ& q : cloud) {
       if (!finite(q)) continue;
-      const std::uint64_t k = key_of(q);
+      const std::uint64_t k = cell_key(q, inv);
       if ((k * 0x9E3779B97F4A7C15ull >> 32) % parts == part) cells.insert(k);
     }
     count += cells.size();

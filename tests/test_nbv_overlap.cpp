@@ -104,16 +104,27 @@ TEST(NbvOverlap, BadBandOrStepIsRefused) {
                std::invalid_argument);
 }
 
-// The NBV with a minimum predicted overlap passes over the best-scoring candidates below
-// it, best first; with a minimum nothing reaches there is no best.
-TEST(NbvOverlap, CandidatesPredictedTooLowArePassedOver) {
-  Room room(true);
-  room.set(4.4, 2.4, 1.0, 2, Label::kOccluded);                    // a target by the open side
-  room.leaves({3.6, 1.6, 0}, {3.65, 3.2, 2.4}, Label::kOccupied);  // hiding it from some
+// An occluded target by the open side of the room, and a wall hiding it from some of
+// the candidates (which then see little of the map); the NBV's parameters that predict
+// the overlap on this room.
+void hide_a_target(Room& room) {
+  room.set(4.4, 2.4, 1.0, 2, Label::kOccluded);
+  room.leaves({3.6, 1.6, 0}, {3.65, 3.2, 2.4}, Label::kOccupied);
+}
+NbvParams predicting_params() {
   NbvParams p;
   p.candidate_spacing = 0.4;
   p.limits = all_round();
   p.overlap_top = 2.4;
+  return p;
+}
+
+// The NBV with a minimum predicted overlap passes over the best-scoring candidates below
+// it, best first; with a minimum nothing reaches there is no best.
+TEST(NbvOverlap, CandidatesPredictedTooLowArePassedOver) {
+  Room room(true);
+  hide_a_target(room);
+  NbvParams p = predicting_params();
   const Point3 robot(1.2, 2.4, 0);
   const NbvResult free = next_best_view(room.t, RobotGeometry{}, robot, {}, p);
   ASSERT_TRUE(free.best && free.best_overlap);
@@ -173,12 +184,8 @@ TEST(NbvOverlap, ARoomWithNothingLeftToSeeStillHasItsBest) {
 // the unpredicted best when nothing is left to see.
 TEST(NbvOverlap, PredictingFirstChoosesTheSameBest) {
   Room room(true);
-  room.set(4.4, 2.4, 1.0, 2, Label::kOccluded);
-  room.leaves({3.6, 1.6, 0}, {3.65, 3.2, 2.4}, Label::kOccupied);
-  NbvParams p;
-  p.candidate_spacing = 0.4;
-  p.limits = all_round();
-  p.overlap_top = 2.4;
+  hide_a_target(room);
+  NbvParams p = predicting_params();
   const Point3 robot(1.2, 2.4, 0);
   const NbvResult free = next_best_view(room.t, RobotGeometry{}, robot, {}, p);
   ASSERT_TRUE(free.best_overlap);

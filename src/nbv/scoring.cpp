@@ -171,7 +171,7 @@ NbvResult best_view_among(const SemiOcTree& tree, std::vector<NbvCandidate> cand
   // first, at a tenth of its scoring at most, and only the candidates predicted to
   // register are scored: the best of those is the NBV either way.
   std::vector<std::optional<OverlapPrediction>> overlap(positions.size());
-  std::vector<std::size_t> to_score;
+  std::vector<std::size_t> to_score, skipped;
   const bool predict_first =
       params.overlap_top &&
       double(targets.size()) >= params.predict_first_factor * double(prediction_rays(params));
@@ -179,12 +179,13 @@ NbvResult best_view_among(const SemiOcTree& tree, std::vector<NbvCandidate> cand
     if (predict_first) {
       overlap[i] = predict_overlap(tree, positions[i], params);
       if (overlap[i]->share < params.min_overlap) {
-        ++res.low_overlap;
+        skipped.push_back(i);
         continue;
       }
     }
     to_score.push_back(i);
   }
+  res.low_overlap = skipped.size();
   std::vector<Point3> scored_positions;
   for (std::size_t i : to_score) scored_positions.push_back(positions[i]);
   const std::vector<double> scored =
@@ -194,20 +195,13 @@ NbvResult best_view_among(const SemiOcTree& tree, std::vector<NbvCandidate> cand
   // None predicted to register sees anything: whether any candidate does decides between
   // "no safe NBV" and "nothing left to see" (below), so the rest are scored too; and
   // when none sees anything, the best is taken unpredicted, as without predicting first.
-  if (predict_first && to_score.size() < positions.size() &&
+  if (!skipped.empty() &&
       std::none_of(scored.begin(), scored.end(), [](double s) { return s > 0; })) {
-    std::vector<std::size_t> rest;
-    std::vector<Point3> rest_positions;
-    for (std::size_t i = 0, k = 0; i < positions.size(); ++i) {
-      if (k < to_score.size() && to_score[k] == i) {
-        ++k;
-        continue;
-      }
-      rest.push_back(i);
-      rest_positions.push_back(positions[i]);
-    }
-    const std::vector<double> more = score_targets(tree, targets, rest_positions, params, nullptr);
-    for (std::size_t k = 0; k < rest.size(); ++k) scores[rest[k]] = more[k];
+    std::vector<Point3> skipped_positions;
+    for (std::size_t i : skipped) skipped_positions.push_back(positions[i]);
+    const std::vector<double> more =
+        score_targets(tree, targets, skipped_positions, params, nullptr);
+    for (std::size_t k = 0; k < skipped.size(); ++k) scores[skipped[k]] = more[k];
     if (std::none_of(more.begin(), more.end(), [](double s) { return s > 0; })) {
       overlap.assign(positions.size(), std::nullopt);
       res.low_overlap = 0;
