@@ -6,6 +6,7 @@
 #include <memory>
 #include <optional>
 #include <unordered_set>
+#include <utility>
 
 #include "parallel_for.h"
 #include "scanner_limits.h"
@@ -78,6 +79,90 @@ const DirectionBins& direction_bins(int per_degree = 1) {
     return all;
   }();
   return bins[std::size_t(std::clamp(per_degree, 1, DirectionBins::kMaxPerDegree) - 1)];
+}
+
+// The directions and distances of a box's points seen from the optical centre, the box
+// given by its corners lo ≤ hi relative to it: elevations in degrees above −90° and
+// azimuth fractions as DirectionBins index them, bounds that hold for every point.
+struct BoxDirections {
+  double nearest = 0, farthest = 0;           // m; nearest 0: the box holds the centre
+  double sin_lo = 0, sin_hi = 0;              // sines of the lowest and highest elevations
+  double elevation_lo = 0, elevation_hi = 0;  // degrees above −90° (with angles)
+  bool full_turn = true;                      // every azimuth (the box surrounds the vertical)
+  double fraction_lo = 0, fraction_hi = 1;    // fraction_lo > fraction_hi: across −180°
+};
+
+// `angles` false: distances and sines only (no trigonometry).
+BoxDirections box_directions(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                             bool angles = true) {
+  BoxDirections d;
+  const auto nearest = [](double l, double h) { return l > 0 ? l : (h < 0 ? -h : 0.0); };
+  const auto farthest = [](double l, double h) { return std::max(std::abs(l), std::abs(h)); };
+  const double nx = nearest(lo.x(), hi.x()), ny = nearest(lo.y(), hi.y());
+  const double nz = nearest(lo.z(), hi.z());
+  const double fx = farthest(lo.x(), hi.x()), fy = farthest(lo.y(), hi.y());
+  const double fz = farthest(lo.z(), hi.z());
+  d.nearest = std::sqrt(nx * nx + ny * ny + nz * nz);
+  d.farthest = std::sqrt(fx * fx + fy * fy + fz * fz);
+  // The lowest elevation is at the box's lowest z, seen from as far (above the centre)
+  // or as near (below it) as the box reaches horizontally; the highest likewise.
+  const double near_h = std::sqrt(nx * nx + ny * ny), far_h = std::sqrt(fx * fx + fy * fy);
+  const auto sine = [](double z, double h) {
+    const double r = std::sqrt(z * z + h * h);
+    return r > 0 ? z / r : 0.0;
+  };
+  const double h_lo = lo.z() >= 0 ? far_h : near_h, h_hi = hi.z() >= 0 ? near_h : far_h;
+  d.sin_lo = sine(lo.z(), h_lo);
+  d.sin_hi = sine(hi.z(), h_hi);
+  if (!angles) return d;
+  constexpr double kDegrees = 180.0 / M_PI;
+  d.elevation_lo = std::atan2(lo.z(), h_lo) * kDegrees + 90.0;
+  d.elevation_hi = std::atan2(hi.z(), h_hi) * kDegrees + 90.0;
+  if (near_h == 0) return d;  // the box's footprint holds the centre's: every azimuth
+  // Otherwise the footprint lies within a half-plane through the centre: its corners'
+  // azimuths about its middle's span less than a half turn.
+  const double middle = std::atan2(0.5 * (lo.y() + hi.y()), 0.5 * (lo.x() + hi.x()));
+  double from = 0, to = 0;
+  for (const double x : {lo.x(), hi.x()})
+    for (const double y : {lo.y(), hi.y()}) {
+      const double a = std::remainder(std::atan2(y, x) - middle, 2 * M_PI);
+      from = std::min(from, a);
+      to = std::max(to, a);
+    }
+  const auto fraction = [](double azimuth) {
+    const double f = (azimuth + M_PI) / (2 * M_PI);
+    return f - std::floor(f);
+  };
+  d.full_turn = false;
+  d.fraction_lo = fraction(middle + from);
+  d.fraction_hi = fraction(middle + to);
+  return d;
+}
+
+// f(bin) for every bin of `b` that directions of `d` fall in, until f returns false.
+template <class F>
+void for_each_bin_of(const DirectionBins& b, const BoxDirections& d, F&& f) {
+  const int r0 = std::clamp(int(d.elevation_lo * b.per_degree), 0, b.rows - 1);
+  const int r1 = std::clamp(int(d.elevation_hi * b.per_degree), 0, b.rows - 1);
+  for (int r = r0; r <= r1; ++r) {
+    const int n = b.count[r];
+    int i0 = 0, i1 = n - 1;
+    if (!d.full_turn) {
+      i0 = b.column(r, d.fraction_lo);
+      i1 = b.column(r, d.fraction_hi);
+      if (i1 < i0) i1 += n;  // across −180°
+    }
+    for (int i = i0; i <= i1; ++i)
+      if (!f(b.first[r] + i % n)) return;
+  }
+}
+
+// Whether a point at distance² `length2` lies more than `tolerance` beyond `cm`, a depth
+// in centimetres (0 or the largest value: none).
+bool beyond_depth(std::uint16_t cm, double length2, double tolerance) {
+  if (cm == 0 || cm == 65535) return false;
+  const double limit = 0.01 * cm + tolerance;
+  return length2 > limit * limit;
 }
 
 }  // namespace
@@ -312,15 +397,32 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
   depth_per_degree_ = k;
 }
 
-namespace {
-// Whether a point at distance² `length2` lies more than `tolerance` beyond `cm`, a depth
-// in centimetres (0 or the largest value: none).
-bool beyond_depth(std::uint16_t cm, double length2, double tolerance) {
-  if (cm == 0 || cm == 65535) return false;
-  const double limit = 0.01 * cm + tolerance;
-  return length2 > limit * limit;
+ReturnDirections::BoxSight ReturnDirections::may_see_box(const Eigen::Vector3d& lo,
+                                                         const Eigen::Vector3d& hi,
+                                                         double tolerance) const {
+  const BoxDirections d = box_directions(lo, hi);
+  if (!(d.nearest > 0)) return {};
+  // Returns per 1° bin; depths per depth bin (a coarser reading of the depths would take
+  // a surface seen obliquely for nearer than it is over much of a degree).
+  bool all_have = true, none_has = true;
+  for_each_bin_of(direction_bins(), d, [&](int bin) {
+    const bool has = bins_[std::size_t(bin)] != 0;
+    all_have &= has;
+    none_has &= !has;
+    return all_have || none_has;
+  });
+  if (none_has) return {false, true};
+  if (!all_have || depth_cm_.empty()) return {all_have, false};
+  const double near2 = d.nearest * d.nearest, far2 = d.farthest * d.farthest;
+  bool all_before = true, all_behind = true;
+  for_each_bin_of(direction_bins(depth_per_degree_), d, [&](int bin) {
+    const std::uint16_t cm = depth_cm_[std::size_t(bin)];
+    all_before &= !beyond_depth(cm, far2, tolerance);
+    all_behind &= beyond_depth(cm, near2, tolerance);
+    return all_before || all_behind;
+  });
+  return {all_before, all_behind};
 }
-}  // namespace
 
 bool ReturnDirections::behind_surface(double dx, double dy, double dz, double tolerance) const {
   if (depth_cm_.empty()) return false;
@@ -510,14 +612,20 @@ Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, con
   return through_opening ? Visibility::kThroughOpening : Visibility::kDirect;
 }
 
+// The best visibility of p from `views`, and in `view` the first view giving it.
 template <bool kMarked>
 Visibility best_visibility(const SemiOcTree& tree, const std::vector<ViewLimits>& views,
-                           const Point3& p, std::size_t& segments) {
+                           const Point3& p, std::size_t& segments, std::uint32_t& view) {
   Visibility best = Visibility::kHidden;
-  for (const ViewLimits& v : views) {
+  view = 0;
+  for (std::size_t i = 0; i < views.size(); ++i) {
     ++segments;
-    best = std::max(best, segment_visibility<kMarked>(tree, v, p));
-    if (best == Visibility::kDirect) break;
+    const Visibility v = segment_visibility<kMarked>(tree, views[i], p);
+    if (v > best) {
+      best = v;
+      view = std::uint32_t(i);
+      if (best == Visibility::kDirect) break;
+    }
   }
   return best;
 }
@@ -598,6 +706,170 @@ int samples_of(const Candidate& c, unsigned leaf_level, LatticePoint out[9]) {
   return 9;
 }
 
+// Proofs that what an octant's samples agree on holds for every point of it
+// (OcclusionParams::exact_octants; docs/occlusion.md, "Exact octants"). Each test is
+// sufficient, not necessary: an octant it cannot prove is split. Needs the tree's marks
+// on occupied, door and window octants (study_occlusion sets them).
+class OctantProof {
+ public:
+  OctantProof(const SemiOcTree& tree, const std::vector<ViewLimits>& views)
+      : tree_(tree), views_(views), leaf_(tree.leaf_size()) {}
+
+  // Whether every point of `c` is seen `v` by the best of the views, given that its
+  // samples all are and that `known` is a lower bound from its label; `hint` is the
+  // view that sees its centre so.
+  bool holds(const Candidate& c, Visibility v, Visibility known, std::uint32_t hint) const {
+    if (v > known && !seen_all(views_[hint], c, v)) return false;
+    if (v == Visibility::kDirect) return true;
+    for (const ViewLimits& view : views_)
+      if (!seen_at_most(view, c, v)) return false;
+    return true;
+  }
+
+ private:
+  struct Box {
+    Point3 lo, hi;
+  };
+  Box box_of(const Candidate& c) const {
+    const double size = leaf_ * double(1u << (tree_.leaf_level() - c.level));
+    const Point3 lo((double(c.key.k[0]) - double(kKeyOrigin)) * leaf_,
+                    (double(c.key.k[1]) - double(kKeyOrigin)) * leaf_,
+                    (double(c.key.k[2]) - double(kKeyOrigin)) * leaf_);
+    return {lo, Point3(lo.x + size, lo.y + size, lo.z + size)};
+  }
+  static std::pair<Eigen::Vector3d, Eigen::Vector3d> relative(const Box& b, const Point3& o) {
+    return {{b.lo.x - o.x, b.lo.y - o.y, b.lo.z - o.z}, {b.hi.x - o.x, b.hi.y - o.y, b.hi.z - o.z}};
+  }
+  static bool holds_point(const Octant& o, const Point3& p) {
+    const double h = o.size / 2;
+    return p.x >= o.center.x - h && p.x < o.center.x + h && p.y >= o.center.y - h &&
+           p.y < o.center.y + h && p.z >= o.center.z - h && p.z < o.center.z + h;
+  }
+  // An octant a segment from the view cannot pass to see beyond as well as `v`: an
+  // occupied one, and for v below direct a door the view does not stand in or a window.
+  bool blocks(const ViewLimits& view, Label l, const octomap::OcTreeKey& key, unsigned level,
+              Visibility v) const {
+    if (l == Label::kOccupied) return true;
+    if (v == Visibility::kDirect) return false;
+    return l == Label::kWindow ||
+           (l == Label::kDoor && !view.own_door.count(pack_octant_key(key, level)));
+  }
+  bool blocks(const ViewLimits& view, const Octant& o, Visibility v) const {
+    return blocks(view, o.label(), o.key, o.level, v);
+  }
+
+  // Every point of c within the view's limits, where its scan got returns, and the
+  // segments to it crossing nothing that stops them being seen `v` (v ≥ through).
+  bool seen_all(const ViewLimits& view, const Candidate& c, Visibility v) const {
+    const ScannerView& sv = *view.view;
+    const auto [lo, hi] = relative(box_of(c), sv.position);
+    const BoxDirections d = box_directions(lo, hi, false);
+    const detail::ScannerLimits& limits = view.range_and_elevation;
+    if (!(d.nearest > 0 && d.nearest * d.nearest >= limits.min_range2 &&
+          d.farthest * d.farthest <= limits.max_range2 && d.sin_lo >= limits.sin_min &&
+          d.sin_hi <= limits.sin_max))
+      return false;
+    if (sv.returns && !sv.returns->may_see_box(lo, hi, leaf_).all) return false;
+    const Visibility stops =
+        v == Visibility::kDirect ? Visibility::kThroughOpening : Visibility::kHidden;
+    return tree_.for_each_marked_in_hull(sv.position, c.key, c.level, [&](const Octant& o) {
+      // The scanner's own octant never hides anything (as for one segment).
+      if (o.label() == Label::kOccupied) return holds_point(o, sv.position);
+      // Doors and windows: a direct view must cross none (but the door it stands in).
+      return !(v == Visibility::kDirect && blocks(view, o, stops));
+    });
+  }
+
+  // No point of c seen better than `v` (hidden or through an opening) from the view:
+  // wholly beyond its limits, where its scan got no returns, or behind a layer of octants
+  // that stop every segment to it.
+  bool seen_at_most(const ViewLimits& view, const Candidate& c, Visibility v) const {
+    const ScannerView& sv = *view.view;
+    const Box box = box_of(c);
+    const auto [lo, hi] = relative(box, sv.position);
+    const BoxDirections d = box_directions(lo, hi, false);
+    const detail::ScannerLimits& limits = view.range_and_elevation;
+    if (d.farthest * d.farthest < limits.min_range2 || d.nearest * d.nearest > limits.max_range2 ||
+        d.sin_hi < limits.sin_min || d.sin_lo > limits.sin_max)
+      return true;
+    if (sv.returns && sv.returns->may_see_box(lo, hi, leaf_).none) return true;
+    // The layers: where the segment to the centre meets such octants, the last before
+    // the box (a wall behind furniture) and the first.
+    const Point3 centre(0.5 * (box.lo.x + box.hi.x), 0.5 * (box.lo.y + box.hi.y),
+                        0.5 * (box.lo.z + box.hi.z));
+    std::optional<octomap::OcTreeKey> first, last;
+    tree_.traverse_marked(sv.position, centre, [&](const RayStep& s) {
+      if (s.summary || s.t_enter <= 0.0) return true;
+      if (!s.node || !blocks(view, s.node->label(), s.key, s.level, v)) return true;
+      if (!first) first = s.key;
+      last = s.key;
+      return true;
+    });
+    return first && (behind_layer(view, box, *last, v) ||
+                     (!(*last == *first) && behind_layer(view, box, *first, v)));
+  }
+
+  // Whether two layers of leaf cells next to the cell `at`, across an axis that separates
+  // the view from the box, stop every segment to the box: each segment crosses the plane
+  // between the two layers in some column and passes through both cells of that column
+  // on either side of it, so one blocking cell per column in the hull's cross-section
+  // stops them all.
+  bool behind_layer(const ViewLimits& view, const Box& box, const octomap::OcTreeKey& at,
+                    Visibility v) const {
+    const Point3& o = view.view->position;
+    const double a[3] = {o.x / leaf_, o.y / leaf_, o.z / leaf_};
+    double lo[3], hi[3];
+    for (int i = 0; i < 3; ++i) {
+      lo[i] = std::round(box.lo[i] / leaf_);
+      hi[i] = std::round(box.hi[i] / leaf_);
+    }
+    constexpr std::int64_t kMaxColumns = 4096;
+    for (int axis = 0; axis < 3; ++axis) {
+      const auto q = double(std::int64_t(at.k[axis]) - kKeyOrigin);
+      for (const double s0 : {q - 1, q}) {
+        // The slab [s0, s0 + 2] lies strictly between the view and the box along `axis`.
+        const bool ahead = a[axis] < s0 && s0 + 2 <= lo[axis];
+        const bool behind = a[axis] > s0 + 2 && hi[axis] <= s0;
+        if (!ahead && !behind) continue;
+        double low[2], high[2];
+        if (!detail::wedge_across_slab(a, lo, hi, axis, s0, s0 + 2, low, high)) continue;
+        const int u = (axis + 1) % 3, w = (axis + 2) % 3;
+        std::int64_t from[2], to[2];
+        for (int j = 0; j < 2; ++j) {
+          from[j] = std::int64_t(std::floor(low[j]));
+          to[j] = std::max(from[j], std::int64_t(std::ceil(high[j])) - 1);
+        }
+        if ((to[0] - from[0] + 1) * (to[1] - from[1] + 1) > kMaxColumns) continue;
+        const auto blocking = [&](std::int64_t along, std::int64_t cu, std::int64_t cw) {
+          std::int64_t cell[3];
+          cell[axis] = along;
+          cell[u] = cu;
+          cell[w] = cw;
+          octomap::OcTreeKey key;
+          for (int i = 0; i < 3; ++i) {
+            const std::int64_t k = cell[i] + kKeyOrigin;
+            if (k < 0 || k > 65535) return false;
+            key.k[i] = octomap::key_type(k);
+          }
+          const std::optional<Octant> found = tree_.find_octant(key);
+          return found && found->node && blocks(view, *found, v);
+        };
+        const auto s = std::int64_t(s0);
+        bool all = true;
+        for (std::int64_t cu = from[0]; cu <= to[0] && all; ++cu)
+          for (std::int64_t cw = from[1]; cw <= to[1] && all; ++cw)
+            all = blocking(s, cu, cw) || blocking(s + 1, cu, cw);
+        if (all) return true;
+      }
+    }
+    return false;
+  }
+
+  const SemiOcTree& tree_;
+  const std::vector<ViewLimits>& views_;
+  double leaf_;
+};
+
 }  // namespace
 
 std::vector<ScannerView> scanner_views(
@@ -616,7 +888,8 @@ Visibility point_visibility(const SemiOcTree& tree, const std::vector<ScannerVie
   std::vector<ViewLimits> limits;
   for (const ScannerView& v : views) limits.push_back(limits_of(tree, v));
   std::size_t segments = 0;
-  return best_visibility<false>(tree, limits, p, segments);
+  std::uint32_t view = 0;
+  return best_visibility<false>(tree, limits, p, segments, view);
 }
 
 OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>& views,
@@ -644,7 +917,9 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
   PackedKeyMap<std::uint32_t> index;     // lattice point → sample id
   std::vector<LatticePoint> points;      // by sample id
   std::vector<std::uint8_t> visibility;  // by sample id
-  std::vector<std::uint32_t> samples;    // ids of each candidate's samples, 9 per candidate
+  std::vector<std::uint32_t> best_view;  // by sample id: the first view giving it
+  const OctantProof proof(tree, limits);
+  std::vector<std::uint32_t> samples;  // ids of each candidate's samples, 9 per candidate
   std::vector<std::size_t> segments;
   while (!todo.empty()) {
     const std::size_t first_new = points.size();
@@ -670,28 +945,47 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
       }
     }
     visibility.resize(points.size());
+    best_view.resize(points.size());
     segments.assign(points.size() - first_new, 0);
     detail::parallel_for(points.size() - first_new, threads, 64, [&](std::size_t i, unsigned) {
       const std::size_t id = first_new + i;
-      visibility[id] = std::uint8_t(
-          best_visibility<true>(tree, limits, unpack(points[id], leaf_size), segments[i]));
+      visibility[id] = std::uint8_t(best_visibility<true>(
+          tree, limits, unpack(points[id], leaf_size), segments[i], best_view[id]));
     });
     for (std::size_t n : segments) report.segments += n;
+
+    // Per candidate: its label, or kSplit.
+    constexpr auto kSplit = std::uint8_t(0xff);
+    std::vector<std::uint8_t> decision(todo.size());
+    std::vector<std::size_t> unproven(threads, 0);
+    detail::parallel_for(todo.size(), threads, 16, [&](std::size_t c, unsigned worker) {
+      const Candidate& o = todo[c];
+      const std::uint32_t* id = &samples[9 * c];
+      const auto known = std::uint8_t(known_visibility(o.node->label(), params.scope));
+      const auto seen = [&](std::uint32_t sample) { return std::max(known, visibility[sample]); };
+      const Label l = label_for(Visibility(seen(id[0])), params.scope);
+      bool uniform = true;
+      if (o.level < leaf) {
+        // Exact: the same visibility, not just the same label, then proven for all of it.
+        for (int i = 1; i < 9 && uniform; ++i)
+          uniform = params.exact_octants ? seen(id[i]) == seen(id[0])
+                                         : label_for(Visibility(seen(id[i])), params.scope) == l;
+        if (uniform && params.exact_octants &&
+            !proof.holds(o, Visibility(seen(id[0])), Visibility(known), best_view[id[0]])) {
+          uniform = false;
+          ++unproven[worker];
+        }
+      }
+      decision[c] = uniform ? std::uint8_t(l) : kSplit;
+    });
+    for (std::size_t n : unproven) report.octants_unproven += n;
 
     std::vector<Candidate> children;
     for (std::size_t c = 0; c < todo.size(); ++c) {
       const Candidate& o = todo[c];
-      const std::uint32_t* id = &samples[9 * c];
-      const auto known = std::uint8_t(known_visibility(o.node->label(), params.scope));
-      auto verdict = [&](std::uint32_t sample) {
-        return label_for(Visibility(std::max(known, visibility[sample])), params.scope);
-      };
-      const Label l = verdict(id[0]);
-      bool uniform = true;
-      if (o.level < leaf)
-        for (int i = 1; i < 9 && uniform; ++i) uniform = verdict(id[i]) == l;
       ++report.octants_tested;
-      if (uniform) {
+      if (decision[c] != kSplit) {
+        const auto l = Label(decision[c]);
         // A leaf of the tree: relabel in place.
         o.node->set_label(l);
         o.node->setLogOdds(tree.log_odds_for(l));

@@ -219,6 +219,7 @@ ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,
   t0 = Clock::now();
   OcclusionParams op;
   op.threads = params_.threads;
+  op.exact_octants = params_.exact_octants;
   const std::vector<ScannerView> all = views();
   if (first) {
     rep.retest = study_occlusion(*tree_, all, op);

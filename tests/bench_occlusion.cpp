@@ -1,6 +1,8 @@
 // Benchmark: the classified map of one lab scan (~400 000 points after preprocessing) at
 // 0.05 m, occupancy + occlusion study from the scan's position, four ways in one run:
 //  * semioctree: discretize into the SemiOcTree (0.8 m coarse voxels) + study_occlusion;
+//    beside it the same with exact octants (OcclusionParams::exact_octants), whose labels
+//    match every voxel judged alone, to show what exactness costs;
 //  * semioctree_k0: the same code with coarse voxel = leaf (a SemiOcTree with k = 0);
 //  * dense_grid: one label byte per 0.05 m voxel in a flat array over the same region, every
 //    free voxel's centre tested by 3D DDA through the array (support/dense_grid.h);
@@ -85,33 +87,40 @@ int main(int argc, char** argv) {
     double seconds = 0, occupancy_seconds = 0;
   };
   auto semioctree_map = [&](double coarse, unsigned threads, std::unique_ptr<SemiOcTree>& tree,
-                            OcclusionReport& report) {
+                            OcclusionReport& report, bool exact = false) {
     const auto t0 = std::chrono::steady_clock::now();
     tree = discretize(*pre.cloud, pre.ceiling_height, {0.05, coarse, 0.8});
     Timed t;
     t.occupancy_seconds = bench::seconds_since(t0);
     OcclusionParams op;
     op.threads = threads;
+    op.exact_octants = exact;
     report = study_occlusion(*tree, {view}, op);
     t.seconds = bench::seconds_since(t0);
     return t;
   };
 
-  std::unique_ptr<SemiOcTree> semi, semi_k0;
+  std::unique_ptr<SemiOcTree> semi, semi_k0, exact;
   std::unique_ptr<testing::DenseGrid> dense;
-  OcclusionReport semi_report, k0_report;
+  OcclusionReport semi_report, k0_report, exact_report;
   testing::DenseOcclusionReport dense_report;
   std::size_t octo_nodes = 0;
   json runs = json::array();
   bench::SideSeconds semi_s, k0_s, dense_s, octo_s;
   std::vector<double> octo_rounds;
   for (unsigned threads : bench::thread_counts()) {
-    std::vector<double> semi_rounds, semi_occupancy, k0_rounds, dense_rounds, dense_build;
+    std::vector<double> semi_rounds, semi_occupancy, semi_study, exact_study, k0_rounds,
+        dense_rounds, dense_build;
     for (int r = 0; r < rounds; ++r) {
       std::fprintf(stderr, "%u thread(s), round %d: semioctree ...\n", threads, r + 1);
       const Timed semi_t = semioctree_map(0.8, threads, semi, semi_report);
       semi_rounds.push_back(semi_t.seconds);
       semi_occupancy.push_back(semi_t.occupancy_seconds);
+      semi_study.push_back(semi_t.seconds - semi_t.occupancy_seconds);
+      std::fprintf(stderr, "%u thread(s), round %d: semioctree, exact octants ...\n", threads,
+                   r + 1);
+      const Timed exact_t = semioctree_map(0.8, threads, exact, exact_report, true);
+      exact_study.push_back(exact_t.seconds - exact_t.occupancy_seconds);
       if (semioctree_only) continue;
       std::fprintf(stderr, "%u thread(s), round %d: semioctree with k = 0 ...\n", threads, r + 1);
       semi_k0.reset();  // one map of this size at a time
@@ -136,6 +145,10 @@ int main(int argc, char** argv) {
     run["threads"] = threads;
     run["semioctree_seconds"] = bench::best_round(semi_rounds);
     run["semioctree_occupancy_seconds"] = bench::best_round(semi_occupancy);
+    run["semioctree_study_seconds"] = bench::best_round(semi_study);
+    run["semioctree_exact_study_seconds"] = bench::best_round(exact_study);
+    run["exact_over_sampled_study"] =
+        bench::best_round(exact_study) / bench::best_round(semi_study);
     run["semioctree_k0_seconds"] =
         semioctree_only ? json(nullptr) : json(bench::best_round(k0_rounds));
     run["dense_grid_seconds"] =
@@ -169,6 +182,14 @@ int main(int argc, char** argv) {
                        {"memory_bytes", semi->memory_bytes()},
                        {"segments", semi_report.segments},
                        {"voxels", voxels_by_label(*semi)}};
+  out["semioctree_exact"] = {
+      {"note",
+       "exact octants: an octant keeps one label only where it is proven for all of it "
+       "(docs/occlusion.md)"},
+      {"octants", exact->statistics().total()},
+      {"segments", exact_report.segments},
+      {"octants_unproven", exact_report.octants_unproven},
+      {"voxels", voxels_by_label(*exact)}};
   if (semioctree_only) {
     out["semioctree_k0"] = out["dense_grid"] = out["octomap_insertPointCloud"] = nullptr;
   } else {
@@ -179,6 +200,7 @@ int main(int argc, char** argv) {
                             {"voxels", voxels_by_label(*semi_k0)}};
     const std::size_t semi_same = same_labels(*dense, *semi);
     const std::size_t k0_same = same_labels(*dense, *semi_k0);
+    out["semioctree_exact"]["voxels_labelled_alike_by_dense_grid"] = same_labels(*dense, *exact);
     out["dense_grid"] = {
         {"size", {dense->size(0), dense->size(1), dense->size(2)}},
         {"memory_bytes", dense->memory_bytes()},
@@ -191,7 +213,8 @@ int main(int argc, char** argv) {
         {"voxels_labelled_alike_by_semioctree_k0", k0_same},
         {"note",
          "every free voxel's centre tested alone (DDA); the semioctree tests an unsplit octant "
-         "by its centre and corners and splits it where they disagree, so a few voxels differ"}};
+         "by its centre and corners and splits it where they disagree, so a few voxels differ "
+         "(with exact octants, none should)"}};
     // OctoMap's answer over the same region: what it holds at each voxel's centre.
     octomap::OcTree octo(0.05);
     octo.insertPointCloud(octo_cloud, octo_origin);

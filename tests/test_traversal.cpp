@@ -362,5 +362,111 @@ TEST(Traversal, MarksStayValidWhenUnmarkedLeavesAreSplit) {
   EXPECT_GT(marked, 0u);
 }
 
+// The wedge from a point to a box: every marked leaf octant whose interior meets it is
+// found, nothing else, on random trees; the geometric test itself agrees with the wedge
+// sampled at many t.
+TEST(Traversal, HullQueryFindsExactlyTheMarkedOctantsTheWedgeMeets) {
+  const std::uint32_t marked_labels =
+      (1u << unsigned(Label::kOccupied)) | (1u << unsigned(Label::kDoor));
+  std::size_t found_total = 0, checked = 0;
+  for (unsigned seed = 1; seed <= 3; ++seed)
+    for (const unsigned k : {2u, 3u}) {
+      auto tree = random_tree(0.1, k, seed);
+      tree->mark_subtrees(marked_labels);
+      std::vector<Octant> marked;
+      tree->for_each_octant([&](const Octant& o) {
+        if (marked_labels & (1u << unsigned(o.label()))) marked.push_back(o);
+      });
+      std::mt19937 rng(seed * 17 + k);
+      const double span = 3 * tree->coarse_size();
+      std::uniform_real_distribution<double> u(-span, span),
+          uz(-tree->coarse_size(), 2 * tree->coarse_size());
+      std::uniform_int_distribution<unsigned> level(0, k);
+      for (int trial = 0; trial < 40; ++trial) {
+        const Point3 apex(u(rng), u(rng), uz(rng));
+        octomap::OcTreeKey key;
+        ASSERT_TRUE(tree->key_of({u(rng), u(rng), uz(rng)}, key));
+        const unsigned lvl = level(rng);
+        const Octant box = tree->make_octant(key, lvl, nullptr);  // snaps the key
+        const double r = tree->leaf_size();
+        const double a[3] = {apex.x / r, apex.y / r, apex.z / r};
+        double lo[3], hi[3];
+        for (int i = 0; i < 3; ++i) {
+          lo[i] = double(box.key.k[i]) - double(kKeyOrigin);
+          hi[i] = lo[i] + box.size / r;
+        }
+        std::set<std::uint64_t> found;
+        tree->for_each_marked_in_hull(apex, box.key, lvl, [&](const Octant& o) {
+          EXPECT_TRUE(found.insert(pack_octant_key(o.key, o.level)).second) << "visited twice";
+          return true;
+        });
+        std::set<std::uint64_t> expected;
+        for (const Octant& o : marked) {
+          double nlo[3], nhi[3];
+          for (int i = 0; i < 3; ++i) {
+            nlo[i] = double(o.key.k[i]) - double(kKeyOrigin);
+            nhi[i] = nlo[i] + o.size / r;
+          }
+          const bool meets = detail::hull_meets_box(a, lo, hi, nlo, nhi);
+          if (meets) expected.insert(pack_octant_key(o.key, o.level));
+          // Sampled: a t at which the wedge's box overlaps the octant with room to spare
+          // means the exact test must say it meets.
+          bool sampled = false;
+          for (int j = 1; j <= 400 && !sampled; ++j) {
+            const double t = j / 400.0;
+            bool all = true;
+            for (int i = 0; i < 3 && all; ++i)
+              all = a[i] + t * (lo[i] - a[i]) < nhi[i] - 1e-6 &&
+                    a[i] + t * (hi[i] - a[i]) > nlo[i] + 1e-6;
+            sampled = all;
+          }
+          if (sampled) {
+            EXPECT_TRUE(meets);
+          }
+          ++checked;
+        }
+        EXPECT_EQ(found, expected) << "seed " << seed << " k " << k << " trial " << trial;
+        found_total += found.size();
+      }
+    }
+  EXPECT_GT(found_total, 100u);
+  EXPECT_GT(checked, 10000u);
+}
+
+// A box standing on an occupied floor only touches it: the wedge from above does not
+// meet the floor, but meets an occupied leaf between the point and the box.
+TEST(Traversal, HullQuerySkipsOctantsThatOnlyTouchTheWedge) {
+  SemiOcTree tree(0.1, 0.8);
+  octomap::OcTreeKey k;
+  const auto occupy = [&](const Point3& p) {
+    ASSERT_TRUE(tree.key_of(p, k));
+    tree.set_label(k, tree.leaf_level(), Label::kOccupied);
+  };
+  for (double x = 0.05; x < 3.2; x += 0.1)
+    for (double y = 0.05; y < 1.6; y += 0.1) occupy({x, y, 0.05});  // floor, z ∈ [0, 0.1)
+  for (int x = 0; x < 4; ++x)
+    for (int y = 0; y < 2; ++y)
+      for (int z = 0; z < 3; ++z) tree.create_coarse({x, y, z});
+  tree.mark_subtrees(1u << unsigned(Label::kOccupied));
+  ASSERT_TRUE(tree.key_of({2.45, 0.85, 0.15}, k));  // the leaf on the floor at x 2.4–2.5
+  const Point3 apex(0.53, 0.87, 1.41);
+  std::size_t n = 0;
+  tree.for_each_marked_in_hull(apex, k, tree.leaf_level(), [&](const Octant&) {
+    ++n;
+    return true;
+  });
+  EXPECT_EQ(n, 0u);
+  occupy({1.45, 0.85, 0.75});  // on the way: z of the wedge there ≈ 0.75
+  tree.mark_subtrees(1u << unsigned(Label::kOccupied));
+  std::vector<Point3> met;
+  tree.for_each_marked_in_hull(apex, k, tree.leaf_level(), [&](const Octant& o) {
+    met.push_back(o.center);
+    return true;
+  });
+  ASSERT_EQ(met.size(), 1u);
+  EXPECT_NEAR(met[0].x, 1.45, 1e-9);
+  EXPECT_NEAR(met[0].z, 0.75, 1e-9);
+}
+
 }  // namespace
 }  // namespace semioctree

@@ -33,6 +33,9 @@ struct SurveyMapParams {
   // one point per cell of this size, so it does not grow with every scan.
   double merged_spacing = 0.02;
   unsigned threads = 0;  // occlusion study threads (0: one per core)
+  // The occlusion study's octants: judged by their 9 samples (the paper's test) or proven
+  // whole (OcclusionParams::exact_octants: right behind thin occluders, slower).
+  bool exact_octants = false;
 };
 
 struct ScanUpdateReport {

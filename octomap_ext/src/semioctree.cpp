@@ -286,6 +286,7 @@ bool SemiOcTree::mark_recurs(SemiOcTreeNode* node, std::uint32_t labels) {
 }
 
 void SemiOcTree::mark_subtrees(std::uint32_t labels) {
+  marked_labels_ = labels;
   for_each_coarse([&](const CoarseIndex&, SemiOcTreeNode* node) {
     if (nodeHasChildren(node))
       mark_recurs(node, labels);

@@ -63,6 +63,15 @@ void add_planning_options(CLI::App& cmd, PlanningOptions& o) {
                  "for surveys where driving costs time; 0: the best score wherever it is")
       ->check(finite_in(0, 100))
       ->capture_default_str();
+  cmd.add_option(
+         "--octants", o.octants,
+         "how the occlusion study labels an octant larger than a leaf: sampled = with the "
+         "label its centre and 8 corners agree on (the paper's test; a table leg's shadow "
+         "or a slit thinner than the octant can slip between them); exact = only with a "
+         "label proven for every point of it, else it is split, so that every leaf gets the "
+         "label it would get alone (about twice the study's time)")
+      ->check(CLI::IsMember({"exact", "sampled"}))
+      ->capture_default_str();
   cmd.add_option("--threads", o.threads, "worker threads (0: one per core; at most 256)")
       ->check(thread_count())
       ->capture_default_str();
@@ -84,6 +93,7 @@ void apply_planning_options(const PlanningOptions& o, SurveyParams& p, bool homo
   p.map.grid = homogeneous ? DiscretizeParams{o.leaf, o.leaf, o.coarse}
                            : DiscretizeParams{o.leaf, o.coarse, 0.0};
   p.map.threads = o.threads;
+  p.map.exact_octants = o.octants == "exact";
   p.preprocess.target_points = o.target_points;
   p.preprocess.ceiling_height = o.ceiling;
   p.nbv.method = o.method;

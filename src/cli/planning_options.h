@@ -18,10 +18,11 @@ struct PlanningOptions {
   double candidate_spacing = 0.5;
   std::size_t target_points = 400000;
   unsigned threads = 0;
-  std::string scope = "floor";  // SurveyScope: room, floor or map
-  double ceiling = 0;           // > 0: the room's height above the floor (--ceiling)
-  double min_overlap = -1;      // < 0: registration's own bound (SurveyParams::min_overlap)
-  double travel_weight = 0;     // 1/m (NbvParams::travel_weight)
+  std::string scope = "floor";      // SurveyScope: room, floor or map
+  double ceiling = 0;               // > 0: the room's height above the floor (--ceiling)
+  double min_overlap = -1;          // < 0: registration's own bound (SurveyParams::min_overlap)
+  double travel_weight = 0;         // 1/m (NbvParams::travel_weight)
+  std::string octants = "sampled";  // sampled or exact (SurveyMapParams::exact_octants)
 };
 void add_planning_options(CLI::App& cmd, PlanningOptions& o);
 

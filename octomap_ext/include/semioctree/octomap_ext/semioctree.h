@@ -219,6 +219,14 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
   // clears it elsewhere. Later edits that add or remove such leaves make the
   // marks stale until the next call; splitting an unmarked leaf keeps them valid.
   void mark_subtrees(std::uint32_t labels);
+  // Calls f(const Octant&) for every leaf octant carrying a label last given to
+  // mark_subtrees whose interior meets the interior of the convex hull of `apex` and the
+  // octant (`key`, `level`) (a wedge from a point to a box), in no particular order;
+  // returning false from f stops the search. Returns false if f stopped it. Octants that
+  // only touch the hull (a floor under the box) are not visited. Marks must be fresh.
+  template <class F>
+  bool for_each_marked_in_hull(const Point3& apex, const octomap::OcTreeKey& key, unsigned level,
+                               F&& f) const;
 
   // --- OctoMap's occupancy updates: refused -----------------------------------
   // Here the labels are the map and the coarse voxels are indexed. OctoMap's
@@ -315,8 +323,13 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
   bool mark_recurs(SemiOcTreeNode* node, std::uint32_t labels);
   void mark_coarse_recurs(SemiOcTreeNode* node, unsigned depth, octomap::OcTreeKey key);
   void delete_children(SemiOcTreeNode* node);
+  template <class F>
+  bool hull_children(const double apex[3], const double lo[3], const double hi[3],
+                     const SemiOcTreeNode* node, unsigned level, const std::int64_t base[3],
+                     F& f) const;
 
   unsigned leaf_level_ = 0;
+  std::uint32_t marked_labels_ = 0;  // the labels last given to mark_subtrees
   // Packed (key >> k) of each coarse voxel → its node.
   PackedKeyMap<SemiOcTreeNode*, 50> coarse_;  // packed coarse index → node
 };

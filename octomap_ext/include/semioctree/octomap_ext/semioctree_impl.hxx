@@ -1,6 +1,8 @@
 // Template members of SemiOcTree (included from semioctree.h).
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -145,6 +147,161 @@ bool SemiOcTree::traverse_children(const SegmentFrame& f, const SemiOcTreeNode* 
     t_cur = t_next;
     p_cur = p_next;
   }
+}
+
+namespace detail {
+// Narrows the parameter interval (t0, t1] to the t with t·d < c; false when none is left.
+inline bool narrow_below(double& t0, double& t1, double d, double c) {
+  if (d > 0)
+    t1 = std::min(t1, c / d);
+  else if (d < 0)
+    t0 = std::max(t0, c / d);
+  else if (!(c > 0))
+    return false;
+  return t0 < t1;
+}
+// Whether the interior of the hull of point a and box [lo, hi] meets the interior of box
+// [nlo, nhi]: the hull is the union over t ∈ [0, 1] of the boxes a + t·([lo, hi] − a), so
+// it does when for some t in (0, 1] those boxes overlap it with positive volume.
+inline bool hull_meets_box(const double a[3], const double lo[3], const double hi[3],
+                           const double nlo[3], const double nhi[3]) {
+  double t0 = 0, t1 = 1;
+  for (int i = 0; i < 3; ++i)
+    if (!narrow_below(t0, t1, lo[i] - a[i], nhi[i] - a[i]) ||
+        !narrow_below(t0, t1, a[i] - hi[i], a[i] - nlo[i]))
+      return false;
+  return true;
+}
+// Where the wedge from a to box [lo, hi] (the boxes a + t·([lo, hi] − a), t ∈ [0, 1])
+// crosses the slab [s0, s1] along `axis`: in `low` and `high`, per other axis (`axis` + 1,
+// then + 2, modulo 3), the range the wedge spans there. False when it never reaches it.
+inline bool wedge_across_slab(const double a[3], const double lo[3], const double hi[3], int axis,
+                              double s0, double s1, double low[2], double high[2]) {
+  double t0 = 0, t1 = 1;
+  const auto reach = [&](double d, double c) {  // t·d <= c
+    if (d > 0)
+      t1 = std::min(t1, c / d);
+    else if (d < 0)
+      t0 = std::max(t0, c / d);
+    else if (c < 0)
+      t1 = -1;
+  };
+  reach(lo[axis] - a[axis], s1 - a[axis]);
+  reach(a[axis] - hi[axis], a[axis] - s0);
+  if (t0 > t1) return false;
+  for (int j = 0; j < 2; ++j) {
+    const int i = (axis + 1 + j) % 3;
+    low[j] = std::min(a[i] + t0 * (lo[i] - a[i]), a[i] + t1 * (lo[i] - a[i]));
+    high[j] = std::max(a[i] + t0 * (hi[i] - a[i]), a[i] + t1 * (hi[i] - a[i]));
+  }
+  return true;
+}
+}  // namespace detail
+
+template <class F>
+bool SemiOcTree::hull_children(const double apex[3], const double lo[3], const double hi[3],
+                               const SemiOcTreeNode* node, unsigned level,
+                               const std::int64_t base[3], F& f) const {
+  const std::int64_t half = std::int64_t(1) << (leaf_level_ - level - 1);
+  for (unsigned c = 0; c < 8; ++c) {
+    if (!nodeChildExists(node, c)) continue;
+    const SemiOcTreeNode* child = getNodeChild(node, c);
+    const bool split = level + 1 < leaf_level_ && nodeHasChildren(child);
+    if (split ? !child->has_flag(SemiOcTreeNode::kMarked)
+              : !(marked_labels_ & (1u << unsigned(child->label()))))
+      continue;
+    std::int64_t child_base[3];
+    double nlo[3], nhi[3];
+    for (int i = 0; i < 3; ++i) {
+      child_base[i] = base[i] + ((c >> i) & 1u ? half : 0);
+      nlo[i] = double(child_base[i]);
+      nhi[i] = nlo[i] + double(half);
+    }
+    if (!detail::hull_meets_box(apex, lo, hi, nlo, nhi)) continue;
+    if (split) {
+      if (!hull_children(apex, lo, hi, child, level + 1, child_base, f)) return false;
+      continue;
+    }
+    const octomap::OcTreeKey key(static_cast<octomap::key_type>(child_base[0] + kKeyOrigin),
+                                 static_cast<octomap::key_type>(child_base[1] + kKeyOrigin),
+                                 static_cast<octomap::key_type>(child_base[2] + kKeyOrigin));
+    if (!f(make_octant(key, level + 1, child))) return false;
+  }
+  return true;
+}
+
+template <class F>
+bool SemiOcTree::for_each_marked_in_hull(const Point3& apex, const octomap::OcTreeKey& key,
+                                         unsigned level, F&& f) const {
+  // In leaf-cell units (cell i is [i, i + 1)), as traverse() scales: the box's bounds and
+  // every octant's are integers, so touching is decided exactly.
+  const double inv = resolution_factor;
+  const double a[3] = {apex.x * inv, apex.y * inv, apex.z * inv};
+  const std::int64_t size = std::int64_t(1) << (leaf_level_ - level);
+  double lo[3], hi[3];
+  for (int i = 0; i < 3; ++i) {
+    if (!std::isfinite(a[i])) return true;
+    lo[i] = double(std::int64_t(key.k[i]) - kKeyOrigin);
+    hi[i] = lo[i] + double(size);
+  }
+  const unsigned k = leaf_level_;
+  const std::int64_t span = std::int64_t(1) << k;
+  const auto coarse_of = [&](double u) {
+    return static_cast<std::int64_t>(std::floor(u / double(span)));
+  };
+  // Coarse layers along the axis the hull spans most; per layer, the range of the hull's
+  // boxes a + t·([lo, hi] − a) over the t that reach it, on the other two axes.
+  int m = 0;
+  double extent[3];
+  for (int i = 0; i < 3; ++i) {
+    extent[i] = std::max(hi[i], a[i]) - std::min(lo[i], a[i]);
+    if (extent[i] > extent[m]) m = i;
+  }
+  const int u = (m + 1) % 3, v = (m + 2) % 3;
+  const std::int64_t limit = std::int64_t(1) << (kTreeDepth - k - 1);  // coarse index range
+  const std::int64_t first = std::max(-limit, coarse_of(std::min(lo[m], a[m])));
+  const std::int64_t last = std::min(limit - 1, coarse_of(std::max(hi[m], a[m])));
+  for (std::int64_t layer = first; layer <= last; ++layer) {
+    double low[2], high[2];
+    if (!detail::wedge_across_slab(a, lo, hi, m, double(layer * span), double((layer + 1) * span),
+                                   low, high))
+      continue;
+    std::int64_t from[2], to[2];
+    for (int j = 0; j < 2; ++j) {
+      from[j] = std::max(-limit, coarse_of(low[j]));
+      to[j] = std::min(limit - 1, coarse_of(high[j]));
+    }
+    for (std::int64_t cu = from[0]; cu <= to[0]; ++cu)
+      for (std::int64_t cv = from[1]; cv <= to[1]; ++cv) {
+        std::int64_t cc[3];
+        cc[m] = layer;
+        cc[u] = cu;
+        cc[v] = cv;
+        std::int64_t base[3];
+        octomap::OcTreeKey ck;
+        double nlo[3], nhi[3];
+        for (int i = 0; i < 3; ++i) {
+          base[i] = cc[i] * span;
+          ck.k[i] = static_cast<octomap::key_type>(base[i] + kKeyOrigin);
+          nlo[i] = double(base[i]);
+          nhi[i] = nlo[i] + double(span);
+        }
+        const SemiOcTreeNode* node =
+            coarse_.value_or(pack_key_parts(ck.k[0] >> k, ck.k[1] >> k, ck.k[2] >> k), nullptr);
+        if (!node) continue;
+        const bool split = k > 0 && nodeHasChildren(node);
+        if (split ? !node->has_flag(SemiOcTreeNode::kMarked)
+                  : !(marked_labels_ & (1u << unsigned(node->label()))))
+          continue;
+        if (!detail::hull_meets_box(a, lo, hi, nlo, nhi)) continue;
+        if (split) {
+          if (!hull_children(a, lo, hi, node, 0, base, f)) return false;
+        } else if (!f(make_octant(ck, 0, node))) {
+          return false;
+        }
+      }
+  }
+  return true;
 }
 
 template <class Visitor>
