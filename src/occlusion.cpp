@@ -577,6 +577,18 @@ ViewLimits limits_of(const SemiOcTree& tree, const ScannerView& v) {
   return {&v, detail::ScannerLimits(v), own_door(tree, v.position)};
 }
 
+// The best a segment from the view that crosses an octant labelled `l` can be seen: an
+// occupied octant hides, a window or a door the view does not stand in leaves it seen
+// through an opening, anything else lets it be seen directly.
+Visibility best_across(const ViewLimits& lim, Label l, const octomap::OcTreeKey& key,
+                       unsigned level) {
+  if (l == Label::kOccupied) return Visibility::kHidden;
+  if (l == Label::kWindow ||
+      (l == Label::kDoor && !lim.own_door.count(pack_octant_key(key, level))))
+    return Visibility::kThroughOpening;
+  return Visibility::kDirect;
+}
+
 // Occupied octants entered at the very end of a segment only touch its end
 // point (a sample on a lattice corner shared with them): they hide nothing.
 constexpr double kEndTolerance = 1e-9;
@@ -600,8 +612,7 @@ Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, con
       blocked = true;
       return false;
     }
-    through_opening |= l == Label::kWindow ||
-                       (l == Label::kDoor && !lim.own_door.count(pack_octant_key(s.key, s.level)));
+    through_opening |= best_across(lim, l, s.key, s.level) == Visibility::kThroughOpening;
     return true;
   };
   if (kMarked)
@@ -745,17 +756,9 @@ class OctantProof {
     return p.x >= o.center.x - h && p.x < o.center.x + h && p.y >= o.center.y - h &&
            p.y < o.center.y + h && p.z >= o.center.z - h && p.z < o.center.z + h;
   }
-  // An octant a segment from the view cannot pass to see beyond as well as `v`: an
-  // occupied one, and for v below direct a door the view does not stand in or a window.
-  bool blocks(const ViewLimits& view, Label l, const octomap::OcTreeKey& key, unsigned level,
-              Visibility v) const {
-    if (l == Label::kOccupied) return true;
-    if (v == Visibility::kDirect) return false;
-    return l == Label::kWindow ||
-           (l == Label::kDoor && !view.own_door.count(pack_octant_key(key, level)));
-  }
-  bool blocks(const ViewLimits& view, const Octant& o, Visibility v) const {
-    return blocks(view, o.label(), o.key, o.level, v);
+  // Whether a segment from the view that crosses the octant is seen no better than `v`.
+  static bool caps_at(const ViewLimits& view, const Octant& o, Visibility v) {
+    return best_across(view, o.label(), o.key, o.level) <= v;
   }
 
   // Every point of c within the view's limits, where its scan got returns, and the
@@ -770,13 +773,11 @@ class OctantProof {
           d.sin_hi <= limits.sin_max))
       return false;
     if (sv.returns && !sv.returns->may_see_box(lo, hi, leaf_).all) return false;
-    const Visibility stops =
-        v == Visibility::kDirect ? Visibility::kThroughOpening : Visibility::kHidden;
     return tree_.for_each_marked_in_hull(sv.position, c.key, c.level, [&](const Octant& o) {
       // The scanner's own octant never hides anything (as for one segment).
       if (o.label() == Label::kOccupied) return holds_point(o, sv.position);
       // Doors and windows: a direct view must cross none (but the door it stands in).
-      return !(v == Visibility::kDirect && blocks(view, o, stops));
+      return best_across(view, o.label(), o.key, o.level) >= v;
     });
   }
 
@@ -800,7 +801,7 @@ class OctantProof {
     std::optional<octomap::OcTreeKey> first, last;
     tree_.traverse_marked(sv.position, centre, [&](const RayStep& s) {
       if (s.summary || s.t_enter <= 0.0) return true;
-      if (!s.node || !blocks(view, s.node->label(), s.key, s.level, v)) return true;
+      if (!s.node || best_across(view, s.node->label(), s.key, s.level) > v) return true;
       if (!first) first = s.key;
       last = s.key;
       return true;
@@ -852,7 +853,7 @@ class OctantProof {
             key.k[i] = octomap::key_type(k);
           }
           const std::optional<Octant> found = tree_.find_octant(key);
-          return found && found->node && blocks(view, *found, v);
+          return found && found->node && caps_at(view, *found, v);
         };
         const auto s = std::int64_t(s0);
         bool all = true;
