@@ -299,6 +299,7 @@ int main(int argc, char** argv) {
         {"occluded_targets", s.scoring.targets},
         {"segments", s.scoring.segments},
         {"segments_blocked_by_cache", s.scoring.blocked_by_cache},
+        {"segments_blocked_by_walls", s.scoring.blocked_by_walls},
         {"segments_visible", s.scoring.visible},
         {"subset_segments", semi_sub_stats.segments},
         {"best",

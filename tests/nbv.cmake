@@ -1,6 +1,7 @@
 # Next-Best-View candidates, scores and the stop percentage (src/nbv/, docs/nbv.md).
 semioctree_add_test(test_nbv_scoring SOURCES test_nbv_scoring.cpp LIBS semioctree)
-target_include_directories(test_nbv_scoring PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+# (and the project's root: the walls' shadows, src/nbv/wall_shadows.h, are tested directly)
+target_include_directories(test_nbv_scoring PRIVATE ${CMAKE_CURRENT_SOURCE_DIR} ${PROJECT_SOURCE_DIR})
 semioctree_add_test(test_nbv_candidates SOURCES test_nbv_candidates.cpp LIBS semioctree)
 target_include_directories(test_nbv_candidates PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
 semioctree_add_test(test_nbv_overlap SOURCES test_nbv_overlap.cpp LIBS semioctree)

@@ -2,7 +2,8 @@
 // hand-placed scanner positions against hand-computed Eq 3 sums (direct, through n
 // occluded octants, blocked, through a door), the volume weights of method 1, the
 // level-ℓ reading of method 2, method 3's frontier faces, agreement with a
-// brute-force reference and with the same map stored as a homogeneous grid,
+// brute-force reference and with the same map stored as a homogeneous grid, the walls'
+// shadows (every line they settle is blocked; scores on a floor of rooms unchanged),
 // thread-count independence, Eq 5 by hand, both counted inside a room, and the choice
 // weighed by the path (travel weight).
 #include <gtest/gtest.h>
@@ -17,6 +18,7 @@
 
 #include "semioctree/nbv.h"
 #include "semioctree/occlusion.h"
+#include "src/nbv/wall_shadows.h"
 #include "support/nbv_maps.h"
 #include "support/ray_reference.h"
 
@@ -321,6 +323,120 @@ TEST(Nbv, ScoresMatchBruteForceReference) {
                     1e-9 * std::max(1.0, scores[i]))
             << "seed " << seed << " position " << i;
     }
+  }
+}
+
+// --- the walls' shadows ---------------------------------------------------------------
+
+// Rooms of a floor, 4.8 × 4.8 × 2.4 m, with what the shadows' proof must get right: full-
+// height walls one leaf thick; a thick wall whose core is occluded; a door (door octants
+// under an occupied lintel) and a window in a wall; a wall built as a diagonal staircase
+// of leaves that only touch at their edges; a wall below scanner height; a tall cupboard
+// (occupied shell, occluded inside); unknown blocks; occluded octants of every level.
+struct FloorMap : Map {
+  explicit FloorMap(unsigned seed) : Map(6, 6, 3) {
+    walls(4.8, 4.8, 2.4);
+    leaves({2.4, 0, 0}, {2.45, 1.0, 2.4}, Label::kOccupied);  // the inner wall, along y
+    leaves({2.4, 1.0, 0}, {2.45, 1.9, 2.0}, Label::kDoor);
+    leaves({2.4, 1.0, 2.0}, {2.45, 1.9, 2.4}, Label::kOccupied);
+    leaves({2.4, 1.9, 0}, {2.45, 4.8, 2.4}, Label::kOccupied);
+    leaves({2.4, 3.5, 1.0}, {2.45, 4.0, 1.8}, Label::kWindow);
+    leaves({0, 3.2, 0}, {2.4, 3.25, 2.4}, Label::kOccupied);  // the thick wall, along x
+    leaves({0, 3.25, 0}, {2.4, 3.3, 2.4}, Label::kOccluded);
+    leaves({0, 3.3, 0}, {2.4, 3.35, 2.4}, Label::kOccupied);
+    for (int i = 0; i < 24; ++i)  // the staircase
+      leaves({3.0 + i * kLeaf, 0.5 + i * kLeaf, 0}, {3.05 + i * kLeaf, 0.55 + i * kLeaf, 2.4},
+             Label::kOccupied);
+    leaves({3.5, 2.5, 0}, {3.55, 4.0, 1.0}, Label::kOccupied);  // the low wall
+    leaves({0.5, 1.0, 0}, {1.1, 1.6, 2.0}, Label::kOccupied);   // the cupboard
+    leaves({0.55, 1.05, 0.05}, {1.05, 1.55, 1.95}, Label::kOccluded);
+    set(4.2, 4.2, 2.0, 2, Label::kUnknown);
+    set(0.4, 4.4, 0.4, 2, Label::kUnknown);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> ux(0.05, 4.75), uz(0.05, 2.35);
+    std::uniform_int_distribution<unsigned> level(1, 4);
+    for (int i = 0; i < 60; ++i) {
+      const Point3 p(ux(rng), ux(rng), uz(rng));
+      const unsigned l = level(rng);
+      if (t.find_octant(p)->label() == Label::kEmpty) set(p.x, p.y, p.z, l, Label::kOccluded);
+    }
+  }
+};
+
+// Whether the line a→b is blocked, by the brute-force traversal (doors pass with
+// `doors_pass`; the scanner's own octant never blocks).
+bool reference_blocked(const SemiOcTree& t, const Point3& a, const Point3& b, bool doors_pass) {
+  const auto steps = testing::reference_traversal(t, a, b);
+  for (std::size_t j = 1; j < steps.size(); ++j) {
+    const auto oc = t.find_octant(steps[j].key);
+    const Label l = steps[j].has_node && oc ? oc->label() : Label::kUnknown;
+    if (l == Label::kOccupied || l == Label::kUnknown || l == Label::kWindow ||
+        (l == Label::kDoor && !doors_pass))
+      return true;
+  }
+  return false;
+}
+
+// What the shadows prove blocked is blocked, whatever the scanner's height within the
+// run of a wall, doors shut or open; and they prove much of what the walls hide.
+TEST(Nbv, WallShadowsProveOnlyBlockedLines) {
+  for (unsigned seed : {1u, 2u}) {
+    const FloorMap m(seed);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> ux(0.05, 4.75), uz(0.05, 2.35), uh(0.9, 1.7);
+    std::vector<Point3> positions, ends;
+    while (positions.size() < 24) {
+      const Point3 p(ux(rng), ux(rng), uh(rng));
+      if (m.t.find_octant(p)->label() == Label::kEmpty) positions.push_back(p);
+    }
+    positions.push_back({2.425, 1.45, 1.3});  // in the door
+    for (int i = 0; i < 600; ++i) ends.push_back({ux(rng), ux(rng), uz(rng)});
+    std::size_t occluded = 0;  // every 7th occluded octant's centre
+    m.t.for_each_octant([&](const Octant& o) {
+      if (o.label() == Label::kOccluded && occluded++ % 7 == 0) ends.push_back(o.center);
+    });
+    for (const bool doors_pass : {false, true}) {
+      const nbv_detail::BlockingColumns columns(m.t, doors_pass, 1.3, {0, 0, 0}, {4.8, 4.8, 0}, 0.0,
+                                                2.4);
+      nbv_detail::WallShadows shadows(columns);
+      std::size_t blocked = 0, proven = 0;
+      for (const Point3& a : positions) {
+        const Label own = m.t.find_octant(a)->label();
+        shadows.reset(a, own == Label::kDoor && !doors_pass);
+        for (const Point3& b : ends) {
+          const bool is_blocked = reference_blocked(m.t, a, b, doors_pass);
+          const bool hides = shadows.hides(b);
+          blocked += is_blocked;
+          proven += hides;
+          EXPECT_TRUE(!hides || is_blocked)
+              << "seed " << seed << " doors pass " << doors_pass << " from " << a.x << " " << a.y
+              << " " << a.z << " to " << b.x << " " << b.y << " " << b.z;
+        }
+      }
+      EXPECT_GT(proven, blocked / 3) << "seed " << seed << ": " << proven << " of " << blocked;
+    }
+  }
+}
+
+// Scores on the floor, the shadows taking most blocked lines, equal the brute force's.
+TEST(Nbv, ScoresOnAFloorMatchBruteForceReference) {
+  const FloorMap m(3);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> ux(0.05, 4.75), uh(0.9, 1.7);
+  std::vector<Point3> positions;
+  while (positions.size() < 8) {
+    const Point3 p(ux(rng), ux(rng), uh(rng));
+    if (m.t.find_octant(p)->label() == Label::kEmpty) positions.push_back(p);
+  }
+  for (const NbvParams& p : {open_limits(1), NbvParams{}}) {
+    ScoringStats st;
+    const auto scores = score_positions(m.t, positions, p, &st);
+    EXPECT_GT(st.visible, 0u);
+    EXPECT_GT(st.blocked_by_walls, st.segments / 10);
+    for (std::size_t i = 0; i < positions.size(); ++i)
+      EXPECT_NEAR(scores[i], reference_score(m.t, positions[i], p.limits),
+                  1e-9 * std::max(1.0, scores[i]))
+          << "position " << i;
   }
 }
 

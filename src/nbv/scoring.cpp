@@ -5,14 +5,18 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
 #include "../parallel_for.h"
 #include "../scanner_limits.h"
+#include "label_roles.h"
 #include "semioctree/timing.h"
 #include "targets.h"
 #include "visibility.h"
+#include "wall_shadows.h"
 
 namespace semioctree {
 
@@ -22,6 +26,7 @@ using detail::parallel_for;
 using detail::ScannerLimits;
 using detail::thread_count;
 using nbv_detail::BlockerCache;
+using nbv_detail::BlockingColumns;
 using nbv_detail::facing_area;
 using nbv_detail::Los;
 using nbv_detail::los_cells;
@@ -30,6 +35,7 @@ using nbv_detail::method1_targets;
 using nbv_detail::resolve_level;
 using nbv_detail::Target;
 using nbv_detail::targets_for;
+using nbv_detail::WallShadows;
 
 // Eq 3 of each position over `targets` (docs/nbv.md, "Score" and "Cost").
 std::vector<double> score_targets(const SemiOcTree& tree, const std::vector<Target>& targets,
@@ -47,12 +53,32 @@ std::vector<double> score_targets(const SemiOcTree& tree, const std::vector<Targ
   for (auto& m : memo) m.store(0, std::memory_order_relaxed);
   const unsigned threads = thread_count(params.threads);
   std::vector<BlockerCache> caches(threads, BlockerCache(tree));
+  // The plane around the candidates and the targets, for the walls' shadows.
+  Point3 lo(std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+            std::numeric_limits<double>::infinity());
+  Point3 hi(-lo.x, -lo.y, -lo.z);
+  const auto extend = [&](const Point3& p) {
+    lo = Point3(std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z));
+    hi = Point3(std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z));
+  };
+  for (const Target& t : targets) extend(t.center);
+  for (const Point3& p : positions) extend(p);
+  std::optional<BlockingColumns> columns;
+  if (!targets.empty() && !positions.empty())
+    columns.emplace(tree, params.see_through_doors, positions.front().z, lo, hi, lo.z, hi.z);
+  std::vector<WallShadows> shadows;
+  if (columns) shadows.assign(threads, WallShadows(*columns));
   std::atomic<std::size_t> scored{0};
   const double cpu =
       parallel_for(positions.size(), threads, 1, [&](std::size_t c, unsigned worker) {
         const Point3& a = positions[c];
         BlockerCache& cache = caches[worker];
         cache.reset(a);
+        WallShadows* shadow = columns ? &shadows[worker] : nullptr;
+        if (shadow) {
+          const std::optional<Octant> own = tree.find_octant(a);
+          shadow->reset(a, !own || nbv_detail::blocks(own->label(), params.see_through_doors));
+        }
         ScoringStats& st = per[c];
         double sum = 0;
         for (std::size_t i = 0; i < targets.size(); ++i) {
@@ -60,6 +86,10 @@ std::vector<double> score_targets(const SemiOcTree& tree, const std::vector<Targ
           const double weight = params.method == 3 ? facing_area(t, a) : t.weight;
           if (weight == 0 || !lim.in_view(a, t.center)) continue;
           ++st.segments;
+          if (shadow && shadow->hides(t.center)) {
+            ++st.blocked_by_walls;
+            continue;
+          }
           cache.aim(t.center);
           if (cache.blocked_in_bin() ||
               cache.passes_through(memo[2 * i].load(std::memory_order_relaxed)) ||
@@ -91,6 +121,7 @@ std::vector<double> score_targets(const SemiOcTree& tree, const std::vector<Targ
     for (const ScoringStats& p : per) {
       stats->segments += p.segments;
       stats->blocked_by_cache += p.blocked_by_cache;
+      stats->blocked_by_walls += p.blocked_by_walls;
       stats->visible += p.visible;
     }
   }

@@ -33,6 +33,7 @@ struct ScoringStats {
   std::size_t targets = 0;           // occluded targets (method 2: level-ℓ cells)
   std::size_t segments = 0;          // candidate–target lines within the scanner's limits
   std::size_t blocked_by_cache = 0;  // of which found blocked without a traversal
+  std::size_t blocked_by_walls = 0;  // of which proven blocked on the plane (wall shadows)
   std::size_t visible = 0;           // of which not blocked (score > 0)
   double cpu_seconds = 0;            // CPU time of all scoring threads (hardly load-dependent)
 };
