@@ -184,10 +184,11 @@ void SurveyOutput::stage_done(SurveyStage stage, const ScanRecord& s) {
       if (nbv.best) {
         std::printf(
             "  nbv: %zu feasible candidates, %zu occluded targets; best (%.3f, %.3f) score "
-            "%.1f, %.2f m away by path, stop %.3f %% [%.2f s]\n",
+            "%.1f, %.2f m away by path, stop %.3f %% [%.2f s; candidates %.2f s, the plan's "
+            "targets and scores %.2f s, its Eq 5 %.2f s]\n",
             nbv.candidate_report.feasible, nbv.scoring.targets, nbv.best->position.x,
             nbv.best->position.y, nbv.best->score, nbv.best->path_m, nbv.stop_percent,
-            s.seconds.nbv);
+            s.seconds.nbv, nbv.seconds_candidates, nbv.seconds_scoring, nbv.seconds_stop);
         if (nbv.best_overlap)
           std::printf("  nbv: predicted overlap %.0f %% (%.0f %% of the rays)%s [%.2f s]\n",
                       100 * nbv.best_overlap->share, 100 * nbv.best_overlap->unweighted_share,

@@ -37,14 +37,26 @@ using nbv_detail::Target;
 using nbv_detail::targets_for;
 using nbv_detail::WallShadows;
 
+// Targets per partial sum of a score: a score is the sum, in order, of the sums over
+// consecutive blocks of this many targets, each in order, whoever computes them.
+constexpr std::size_t kTargetsPerSum = 16384;
+// Fewer candidates than this are scored a block of targets at a time, spread over the
+// threads; more, a candidate at a time (its blocker cache warm over all its targets).
+constexpr std::size_t kSplitBelow = 8;
+
 // Eq 3 of each position over `targets` (docs/nbv.md, "Score" and "Cost").
 std::vector<double> score_targets(const SemiOcTree& tree, const std::vector<Target>& targets,
                                   const std::vector<Point3>& positions, const NbvParams& params,
                                   ScoringStats* stats) {
   const unsigned level = resolve_level(tree, params);
   const ScannerLimits lim(params.limits);
-  std::vector<double> scores(positions.size(), 0.0);
-  std::vector<ScoringStats> per(positions.size());
+  const std::size_t blocks =
+      std::max<std::size_t>(1, (targets.size() + kTargetsPerSum - 1) / kTargetsPerSum);
+  const bool split = positions.size() < kSplitBelow;
+  const std::size_t per_item = split ? 1 : blocks;  // blocks of targets per work item
+  const std::size_t items_per_position = blocks / per_item;
+  std::vector<double> partial(positions.size() * blocks, 0.0);
+  std::vector<ScoringStats> per(positions.size() * items_per_position);
   // The last blocker found on a line to each target, from any candidate: the
   // occluder that hides a target usually hides it from the neighbouring
   // candidates too. It only saves traversals (any blocker is a proof), so the
@@ -68,52 +80,69 @@ std::vector<double> score_targets(const SemiOcTree& tree, const std::vector<Targ
     columns.emplace(tree, params.see_through_doors, positions.front().z, lo, hi, lo.z, hi.z);
   std::vector<WallShadows> shadows;
   if (columns) shadows.assign(threads, WallShadows(*columns));
+  // The position each worker's cache and shadows were last set for.
+  std::vector<std::size_t> set_for(threads, positions.size());
+  std::vector<std::atomic<std::size_t>> items_left(positions.size());
+  for (auto& n : items_left) n.store(items_per_position, std::memory_order_relaxed);
   std::atomic<std::size_t> scored{0};
-  const double cpu =
-      parallel_for(positions.size(), threads, 1, [&](std::size_t c, unsigned worker) {
+  const double cpu = parallel_for(
+      positions.size() * items_per_position, threads, 1, [&](std::size_t item, unsigned worker) {
+        const std::size_t c = item / items_per_position;
+        const std::size_t first_block = (item % items_per_position) * per_item;
         const Point3& a = positions[c];
         BlockerCache& cache = caches[worker];
-        cache.reset(a);
         WallShadows* shadow = columns ? &shadows[worker] : nullptr;
-        if (shadow) {
-          const std::optional<Octant> own = tree.find_octant(a);
-          shadow->reset(a, !own || nbv_detail::blocks(own->label(), params.see_through_doors));
+        if (set_for[worker] != c) {
+          set_for[worker] = c;
+          cache.reset(a);
+          if (shadow) {
+            const std::optional<Octant> own = tree.find_octant(a);
+            shadow->reset(a, !own || nbv_detail::blocks(own->label(), params.see_through_doors));
+          }
         }
-        ScoringStats& st = per[c];
-        double sum = 0;
-        for (std::size_t i = 0; i < targets.size(); ++i) {
-          const Target& t = targets[i];
-          const double weight = params.method == 3 ? facing_area(t, a) : t.weight;
-          if (weight == 0 || !lim.in_view(a, t.center)) continue;
-          ++st.segments;
-          if (shadow && shadow->hides(t.center)) {
-            ++st.blocked_by_walls;
-            continue;
+        ScoringStats& st = per[item];
+        for (std::size_t b = first_block; b < first_block + per_item; ++b) {
+          double sum = 0;
+          const std::size_t end = std::min(targets.size(), (b + 1) * kTargetsPerSum);
+          for (std::size_t i = b * kTargetsPerSum; i < end; ++i) {
+            const Target& t = targets[i];
+            const double weight = params.method == 3 ? facing_area(t, a) : t.weight;
+            if (weight == 0 || !lim.in_view(a, t.center)) continue;
+            ++st.segments;
+            if (shadow && shadow->hides(t.center)) {
+              ++st.blocked_by_walls;
+              continue;
+            }
+            cache.aim(t.center);
+            if (cache.blocked_in_bin() ||
+                cache.passes_through(memo[2 * i].load(std::memory_order_relaxed)) ||
+                cache.passes_through(memo[2 * i + 1].load(std::memory_order_relaxed))) {
+              ++st.blocked_by_cache;
+              continue;
+            }
+            const Los los = params.method == 2
+                                ? los_cells(tree, level, a, t, &cache, params.see_through_doors)
+                                : los_octants(tree, a, t.center, &cache, params.see_through_doors);
+            if (los.blocker) {  // keep the last two
+              memo[2 * i + 1].store(memo[2 * i].load(std::memory_order_relaxed),
+                                    std::memory_order_relaxed);
+              memo[2 * i].store(los.blocker, std::memory_order_relaxed);
+            }
+            if (!los.visible) continue;
+            ++st.visible;
+            // Method 3: a frontier face in view is new surface whatever lies on the way.
+            sum += params.method == 3 ? weight : weight / (1.0 + double(los.n));
           }
-          cache.aim(t.center);
-          if (cache.blocked_in_bin() ||
-              cache.passes_through(memo[2 * i].load(std::memory_order_relaxed)) ||
-              cache.passes_through(memo[2 * i + 1].load(std::memory_order_relaxed))) {
-            ++st.blocked_by_cache;
-            continue;
-          }
-          const Los los = params.method == 2
-                              ? los_cells(tree, level, a, t, &cache, params.see_through_doors)
-                              : los_octants(tree, a, t.center, &cache, params.see_through_doors);
-          if (los.blocker) {  // keep the last two
-            memo[2 * i + 1].store(memo[2 * i].load(std::memory_order_relaxed),
-                                  std::memory_order_relaxed);
-            memo[2 * i].store(los.blocker, std::memory_order_relaxed);
-          }
-          if (!los.visible) continue;
-          ++st.visible;
-          // Method 3: a frontier face in view is new surface whatever lies on the way.
-          sum += params.method == 3 ? weight : weight / (1.0 + double(los.n));
+          partial[c * blocks + b] = sum;
         }
-        scores[c] = sum;
-        const std::size_t done = scored.fetch_add(1, std::memory_order_relaxed) + 1;
-        if (params.progress) params.progress(done, positions.size());
+        if (items_left[c].fetch_sub(1, std::memory_order_acq_rel) == 1) {
+          const std::size_t done = scored.fetch_add(1, std::memory_order_relaxed) + 1;
+          if (params.progress) params.progress(done, positions.size());
+        }
       });
+  std::vector<double> scores(positions.size(), 0.0);
+  for (std::size_t c = 0; c < positions.size(); ++c)
+    for (std::size_t b = 0; b < blocks; ++b) scores[c] += partial[c * blocks + b];
   if (stats) {
     *stats = ScoringStats{};
     stats->targets = targets.size();
@@ -135,8 +164,12 @@ std::vector<double> score_positions(const SemiOcTree& tree, const std::vector<Po
   return score_targets(tree, targets_for(tree, params), positions, params, stats);
 }
 
-double stop_percentage(const SemiOcTree& tree, const Point3& nbv, const ScannerView& limits,
-                       unsigned threads, const std::optional<RoomBox>& room) {
+namespace {
+
+// Eq 5 from `nbv` over `targets`, method 1's targets in `room`.
+double stop_percentage_over(const SemiOcTree& tree, const std::vector<Target>& targets,
+                            const Point3& nbv, const ScannerView& limits, unsigned threads,
+                            const std::optional<RoomBox>& room) {
   double total = 0;
   if (room) {
     tree.for_each_octant([&](const Octant& o) {
@@ -149,7 +182,6 @@ double stop_percentage(const SemiOcTree& tree, const Point3& nbv, const ScannerV
       total += stats.volume[static_cast<int>(l)];
   }
   if (total <= 0) return 0.0;
-  const std::vector<Target> targets = method1_targets(tree, room);
   const ScannerLimits lim(limits);
   // Each target's share seen: its Eq 4 term (1, 1/(1+n) or 0).
   std::vector<double> share(targets.size(), 0.0);
@@ -163,6 +195,13 @@ double stop_percentage(const SemiOcTree& tree, const Point3& nbv, const ScannerV
   for (std::size_t i = 0; i < targets.size(); ++i)
     seen += share[i] * targets[i].weight * leaf_volume;
   return 100.0 * seen / total;
+}
+
+}  // namespace
+
+double stop_percentage(const SemiOcTree& tree, const Point3& nbv, const ScannerView& limits,
+                       unsigned threads, const std::optional<RoomBox>& room) {
+  return stop_percentage_over(tree, method1_targets(tree, room), nbv, limits, threads, room);
 }
 
 NbvResult next_best_view(const SemiOcTree& tree, const RobotGeometry& robot,
@@ -279,8 +318,12 @@ NbvResult best_view_among(const SemiOcTree& tree, std::vector<NbvCandidate> cand
   res.seconds_overlap = seconds_since(t0);
   t0 = Clock::now();
   if (res.best) {
-    res.stop_percent =
-        stop_percentage(tree, res.best->position, params.limits, params.threads, params.room);
+    // Eq 5 counts method 1's targets, whatever the score's method.
+    const std::vector<Target> method1 =
+        params.method == 1 ? std::vector<Target>() : method1_targets(tree, params.room);
+    const std::vector<Target>& eq5_targets = params.method == 1 ? targets : method1;
+    res.stop_percent = stop_percentage_over(tree, eq5_targets, res.best->position, params.limits,
+                                            params.threads, params.room);
     // Weighed by the path, the NBV may see less than the highest-scoring candidate: what
     // that one would still see keeps the survey going (a far view of much hidden space),
     // unless it was passed over for its overlap.
@@ -290,9 +333,9 @@ NbvResult best_view_among(const SemiOcTree& tree, std::vector<NbvCandidate> cand
     const bool weighed = params.travel_weight > 0;
     const bool passed_over = top.predicted_overlap && *top.predicted_overlap < params.min_overlap;
     if (weighed && top.score > res.best->score && !passed_over)
-      res.stop_percent =
-          std::max(res.stop_percent,
-                   stop_percentage(tree, top.position, params.limits, params.threads, params.room));
+      res.stop_percent = std::max(
+          res.stop_percent, stop_percentage_over(tree, eq5_targets, top.position, params.limits,
+                                                 params.threads, params.room));
   }
   res.seconds_stop = seconds_since(t0);
   return res;
