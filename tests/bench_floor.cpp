@@ -154,8 +154,9 @@ int main(int argc, char** argv) {
     SurveyParams p = testing::cli_survey_params(scene, threads, std::size_t(scans));
     sim::CoverageAccumulator coverage(ref);
     sim_platform::SimulatedPlatform platform(
-        scene, seed, threads, [&coverage](const Cloud& points, const Eigen::Isometry3d& to_world) {
-          sim_platform::add_to_coverage(coverage, points, to_world);
+        scene, seed, threads,
+        [&coverage, threads](const Cloud& points, const Eigen::Isometry3d& to_world) {
+          sim_platform::add_to_coverage(coverage, points, to_world, threads);
         });
     p.may_stand = platform.survey_area_rule();
     BestScorePolicy policy;

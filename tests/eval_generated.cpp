@@ -113,8 +113,8 @@ SceneResult evaluate(std::uint64_t seed, sim::GeneratedKind asked, const Options
     sim::CoverageAccumulator coverage(ref);
     sim_platform::SimulatedPlatform platform(
         scene, seed, o.threads,
-        [&coverage](const Cloud& points, const Eigen::Isometry3d& to_world) {
-          sim_platform::add_to_coverage(coverage, points, to_world);
+        [&coverage, &o](const Cloud& points, const Eigen::Isometry3d& to_world) {
+          sim_platform::add_to_coverage(coverage, points, to_world, o.threads);
         });
     p.may_stand = platform.survey_area_rule();
     BestScorePolicy policy;

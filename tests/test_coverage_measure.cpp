@@ -83,6 +83,30 @@ TEST(Coverage, TheAccumulatorOfScansEqualsTheCoverageOfAllTheirPoints) {
   EXPECT_THROW(CoverageAccumulator(ref, 0.0), std::invalid_argument);
 }
 
+// Points added on several workers flag what they flag one by one, whatever the workers.
+TEST(Coverage, PointsAddedOnWorkersFlagWhatTheyFlagOneByOne) {
+  CoverageReference ref;
+  for (int i = 0; i < 3000; ++i) ref.points.emplace_back(0.02 * (i % 60), 0.02 * (i / 60), 1.0);
+  // 100 000 points (several workers' chunks) near a third of the samples, a few not finite.
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 100000; ++i) {
+    const int s = (i * 7) % 3000;
+    if (s % 3 != 0) continue;
+    points.emplace_back(0.02 * (s % 60) + 0.001 * (i % 11), 0.02 * (s / 60), 1.0 + 0.002 * (i % 5));
+  }
+  points.emplace_back(std::nan(""), 0.0, 1.0);
+  CoverageAccumulator one_by_one(ref);
+  for (const Eigen::Vector3d& p : points) one_by_one.add(p);
+  ASSERT_GT(one_by_one.count().covered, 500u);
+  ASSERT_LT(one_by_one.count().covered, 3000u);
+  for (const unsigned threads : {1u, 2u, 3u}) {
+    CoverageAccumulator acc(ref);
+    acc.add(
+        points.size(), [&](std::size_t i) { return points[i]; }, threads);
+    EXPECT_EQ(acc.covered(), one_by_one.covered()) << threads << " workers";
+  }
+}
+
 TEST(Coverage, AFullScanOfTheEmptyBoxRoomCoversItsReference) {
   // box-room: walls, floor and ceiling only (no furniture), a convex room: one scan
   // from the start sees every inner wall face the reference holds.

@@ -131,9 +131,13 @@ void SimulatedPlatform::move_to(const Point3& target) {
 }
 
 void add_to_coverage(sim::CoverageAccumulator& coverage, const Cloud& points,
-                     const Eigen::Isometry3d& scanner_to_world) {
-  for (const pcl::PointXYZ& p : points)
-    coverage.add(scanner_to_world * p.getVector3fMap().cast<double>());
+                     const Eigen::Isometry3d& scanner_to_world, unsigned threads) {
+  coverage.add(
+      points.size(),
+      [&](std::size_t i) {
+        return Eigen::Vector3d(scanner_to_world * points[i].getVector3fMap().cast<double>());
+      },
+      threads);
 }
 
 OraclePolicy::OraclePolicy(const SimulatedPlatform& platform,

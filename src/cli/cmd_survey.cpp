@@ -77,14 +77,15 @@ constexpr std::size_t kMissedPartsListed = 8;
 // reference samples near them (survey.json's coverage), and are not kept.
 class SurveyCoverage {
  public:
-  SurveyCoverage(const sim::GroundTruth& truth, const std::string& cache_dir)
+  SurveyCoverage(const sim::GroundTruth& truth, const std::string& cache_dir, unsigned threads)
       : reference_(sim::load_or_compute_coverage_reference(truth, cache_dir)),
-        accumulator_(reference_) {}
+        accumulator_(reference_),
+        threads_(threads) {}
 
   // SimulatedPlatform's PlacedPoints.
   void add(const Cloud& points, const Eigen::Isometry3d& scanner_to_world) {
     const auto t0 = Clock::now();
-    sim_platform::add_to_coverage(accumulator_, points, scanner_to_world);
+    sim_platform::add_to_coverage(accumulator_, points, scanner_to_world, threads_);
     last_seconds_ = seconds_since(t0);
   }
 
@@ -94,6 +95,7 @@ class SurveyCoverage {
  private:
   sim::CoverageReference reference_;
   sim::CoverageAccumulator accumulator_;
+  unsigned threads_;
   double last_seconds_ = 0;
 };
 
@@ -274,7 +276,7 @@ void run_survey(const SurveyOptions& o) {
   std::unique_ptr<SurveyCoverage> coverage;
   SimulatedPlatform::PlacedPoints count_coverage;
   if (!o.skip_coverage) {
-    coverage = std::make_unique<SurveyCoverage>(truth, cache);
+    coverage = std::make_unique<SurveyCoverage>(truth, cache, o.plan.threads);
     count_coverage = [&coverage](const Cloud& points, const Eigen::Isometry3d& to_world) {
       coverage->add(points, to_world);
     };

@@ -1,10 +1,15 @@
 // Survey coverage: the reference samples with a measured point nearby.
 #include "semioctree/sim/coverage/measure.h"
 
+#include <algorithm>
+#include <atomic>
+#include <cstdint>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
 
 #include "coverage/spatial_hash.h"
+#include "parallel.h"
 
 namespace semioctree::sim {
 
@@ -35,6 +40,31 @@ void CoverageAccumulator::add(const Eigen::Vector3d& point_world) {
 
 void CoverageAccumulator::add(const std::vector<Eigen::Vector3f>& points_world) {
   for (const Eigen::Vector3f& p : points_world) add(p.cast<double>());
+}
+
+void CoverageAccumulator::add(std::size_t count,
+                              const std::function<Eigen::Vector3d(std::size_t)>& point_world,
+                              unsigned threads) {
+  // Each worker flags what its share of the points covers in flags of its own, then ORs
+  // them into the accumulated ones.
+  constexpr std::size_t kChunk = 1 << 14;
+  std::atomic<std::size_t> next{0};
+  std::mutex merge;
+  detail::run_on_threads(std::min<unsigned>(detail::thread_count(threads),
+                                            unsigned(std::max<std::size_t>(1, count / kChunk))),
+                         [&](bool) {
+                           std::vector<std::uint8_t> flags(covered_.size(), 0);
+                           for (std::size_t first; (first = next.fetch_add(kChunk)) < count;)
+                             for (std::size_t i = first; i < std::min(count, first + kChunk); ++i) {
+                               const Eigen::Vector3d p = point_world(i);
+                               if (p.allFinite())
+                                 samples_->for_each_within(p, tolerance_,
+                                                           [&](std::uint32_t j) { flags[j] = 1; });
+                             }
+                           const std::lock_guard<std::mutex> lock(merge);
+                           for (std::size_t j = 0; j < flags.size(); ++j)
+                             if (flags[j]) covered_[j] = true;
+                         });
 }
 
 std::vector<bool> CoverageAccumulator::flags_of(

@@ -91,10 +91,10 @@ class SimulatedPlatform : public ScanPlatform {
   std::vector<Eigen::Vector3d> optical_centres_;
 };
 
-// Flags the reference samples that a placed scan's points cover: the body of a
-// PlacedPoints that measures coverage.
+// Flags the reference samples that a placed scan's points cover, on `threads` workers (0:
+// one per core): the body of a PlacedPoints that measures coverage.
 void add_to_coverage(sim::CoverageAccumulator& coverage, const Cloud& points,
-                     const Eigen::Isometry3d& scanner_to_world);
+                     const Eigen::Isometry3d& scanner_to_world, unsigned threads = 0);
 
 // The yardstick: scans every feasible candidate in the simulator and takes the safe one
 // whose points cover the most reference samples not covered yet (greedy, perfect

@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -52,6 +53,10 @@ class CoverageAccumulator {
   // that is not finite is ignored.
   void add(const Eigen::Vector3d& point_world);
   void add(const std::vector<Eigen::Vector3f>& points_world);
+  // The same for `count` points, point i being `point_world(i)`, on `threads` workers (0:
+  // one per core): the flags set do not depend on them. point_world must be thread-safe.
+  void add(std::size_t count, const std::function<Eigen::Vector3d(std::size_t)>& point_world,
+           unsigned threads);
 
   // The flags these points alone set (what add would flag), the accumulated ones untouched.
   std::vector<bool> flags_of(const std::vector<Eigen::Vector3f>& points_world) const;
