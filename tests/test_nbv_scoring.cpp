@@ -230,9 +230,26 @@ std::vector<Point3> random_positions(unsigned seed, int count, const SemiOcTree*
   return out;
 }
 
-// The line a→b by the brute-force traversal: nullopt when blocked (an occupied, unknown,
-// door or window octant other than the scanner's own, or b outside the scanner's limits),
+// The segment a→b by the brute-force traversal: nullopt when blocked (an occupied,
+// unknown, window or, unless `doors_pass`, door octant other than the scanner's own),
 // else the number of occluded octants crossed between the two ends.
+std::optional<int> reference_segment(const SemiOcTree& t, const Point3& a, const Point3& b,
+                                     bool doors_pass = false) {
+  const auto steps = testing::reference_traversal(t, a, b);
+  int n = 0;
+  for (std::size_t j = 1; j < steps.size(); ++j) {
+    const auto oc = t.find_octant(steps[j].key);
+    const Label l = steps[j].has_node && oc ? oc->label() : Label::kUnknown;
+    if (l == Label::kOccupied || l == Label::kUnknown || l == Label::kWindow ||
+        (l == Label::kDoor && !doors_pass))
+      return std::nullopt;
+    if (l == Label::kOccluded && j + 1 < steps.size()) ++n;
+  }
+  return n;
+}
+
+// The line a→b: as reference_segment, and nullopt too when b lies outside the scanner's
+// limits.
 std::optional<int> reference_line(const SemiOcTree& t, const Point3& a, const Point3& b,
                                   const ScannerView& lim) {
   const double dx = b.x - a.x, dy = b.y - a.y, dz = b.z - a.z;
@@ -240,16 +257,7 @@ std::optional<int> reference_line(const SemiOcTree& t, const Point3& a, const Po
   if (range < lim.min_range || range > lim.max_range || range == 0) return std::nullopt;
   const double elevation = std::asin(dz / range) * 180 / M_PI;
   if (elevation < lim.elevation_min_deg || elevation > lim.elevation_max_deg) return std::nullopt;
-  const auto steps = testing::reference_traversal(t, a, b);
-  int n = 0;
-  for (std::size_t j = 1; j < steps.size(); ++j) {
-    const auto oc = t.find_octant(steps[j].key);
-    const Label l = steps[j].has_node && oc ? oc->label() : Label::kUnknown;
-    if (l == Label::kOccupied || l == Label::kUnknown || l == Label::kDoor || l == Label::kWindow)
-      return std::nullopt;
-    if (l == Label::kOccluded && j + 1 < steps.size()) ++n;
-  }
-  return n;
+  return reference_segment(t, a, b);
 }
 
 // Eq 3 (method 1) with the brute-force traversal of tests/support: no cache,
@@ -364,20 +372,6 @@ struct FloorMap : Map {
   }
 };
 
-// Whether the line a→b is blocked, by the brute-force traversal (doors pass with
-// `doors_pass`; the scanner's own octant never blocks).
-bool reference_blocked(const SemiOcTree& t, const Point3& a, const Point3& b, bool doors_pass) {
-  const auto steps = testing::reference_traversal(t, a, b);
-  for (std::size_t j = 1; j < steps.size(); ++j) {
-    const auto oc = t.find_octant(steps[j].key);
-    const Label l = steps[j].has_node && oc ? oc->label() : Label::kUnknown;
-    if (l == Label::kOccupied || l == Label::kUnknown || l == Label::kWindow ||
-        (l == Label::kDoor && !doors_pass))
-      return true;
-  }
-  return false;
-}
-
 // What the shadows prove blocked is blocked, whatever the scanner's height within the
 // run of a wall, doors shut or open; and they prove much of what the walls hide.
 // (A sanitized run, several times slower, checks one floor from fewer positions.)
@@ -409,7 +403,7 @@ TEST(Nbv, WallShadowsProveOnlyBlockedLines) {
         const Label own = m.t.find_octant(a)->label();
         shadows.reset(a, own == Label::kDoor && !doors_pass);
         for (const Point3& b : ends) {
-          const bool is_blocked = reference_blocked(m.t, a, b, doors_pass);
+          const bool is_blocked = !reference_segment(m.t, a, b, doors_pass);
           const bool hides = shadows.hides(b);
           blocked += is_blocked;
           proven += hides;

@@ -48,14 +48,14 @@ constexpr std::int64_t kMaxColumns = std::int64_t(1) << 24;
 BlockingColumns::BlockingColumns(const SemiOcTree& tree, bool doors_pass, double height,
                                  const Point3& lo, const Point3& hi, double z_min, double z_max)
     : tree_(tree), doors_pass_(doors_pass), inv_(1.0 / tree.getResolution()) {
-  const double inv = inv_;
-  height_ = static_cast<std::int64_t>(std::floor(height * inv));
-  z_lo_ = static_cast<std::int64_t>(std::floor(z_min * inv)) - 1;
-  z_hi_ = static_cast<std::int64_t>(std::ceil(z_max * inv)) + 1;
-  i0_ = static_cast<std::int64_t>(std::floor(lo.x * inv));
-  j0_ = static_cast<std::int64_t>(std::floor(lo.y * inv));
-  ni_ = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::floor(hi.x * inv)) - i0_ + 1);
-  nj_ = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::floor(hi.y * inv)) - j0_ + 1);
+  const auto cell = [&](double v) { return static_cast<std::int64_t>(std::floor(v * inv_)); };
+  height_ = cell(height);
+  z_lo_ = cell(z_min) - 1;
+  z_hi_ = static_cast<std::int64_t>(std::ceil(z_max * inv_)) + 1;
+  i0_ = cell(lo.x);
+  j0_ = cell(lo.y);
+  ni_ = std::max<std::int64_t>(0, cell(hi.x) - i0_ + 1);
+  nj_ = std::max<std::int64_t>(0, cell(hi.y) - j0_ + 1);
   // Runs are packed in 16 bits each: a taller span gets no columns, and neither does a
   // plane of more than kMaxColumns (no line is then proven blocked on the plane).
   if (!(height_ > z_lo_ && height_ < z_hi_) || z_hi_ - z_lo_ >= 0xfff0 || ni_ * nj_ > kMaxColumns)
@@ -76,10 +76,10 @@ std::pair<std::int64_t, std::int64_t> BlockingColumns::run(std::int64_t i, std::
                                    static_cast<octomap::key_type>(j + kKeyOrigin),
                                    static_cast<octomap::key_type>(z + kKeyOrigin));
       const std::optional<Octant> o = tree_.find_octant(key);
-      const std::int64_t size = std::int64_t(1) << (k - (o ? o->level : 0));
       if (o && !blocks(o->label(), doors_pass_)) return false;
-      bottom = o ? leaf_cell(o->key.k[2]) : (z >= 0 ? z / size : -((-z + size - 1) / size)) * size;
-      top = bottom + size;
+      const unsigned shift = k - (o ? o->level : 0);       // the octant's side: 2^shift leaves
+      bottom = (z >> shift) * (std::int64_t(1) << shift);  // arithmetic shift: floor
+      top = bottom + (std::int64_t(1) << shift);
       return true;
     };
     std::int64_t lo = height_, hi = height_, bottom = 0, top = 0;

@@ -39,7 +39,9 @@ void CoverageAccumulator::add(const Eigen::Vector3d& point_world) {
 }
 
 void CoverageAccumulator::add(const std::vector<Eigen::Vector3f>& points_world) {
-  for (const Eigen::Vector3f& p : points_world) add(p.cast<double>());
+  add(
+      points_world.size(),
+      [&](std::size_t i) { return Eigen::Vector3d(points_world[i].cast<double>()); }, 1);
 }
 
 void CoverageAccumulator::add(std::size_t count,
