@@ -60,7 +60,9 @@ TEST(CoverageCache, RoundTripsAndIsKeyedByTheScene) {
   std::cout << "box-room reference: computed in " << first.seconds << " s, loaded in "
             << second.seconds << " s\n";
   // The computed and the cached results equal a plain computation.
-  EXPECT_EQ(compute_coverage_reference(truth).visible, first.visible);
+  const CoverageReference plain = compute_coverage_reference(truth);
+  EXPECT_EQ(plain.visible, first.visible);
+  EXPECT_EQ(plain.key, first.key);  // its samples' digest taken from them at hand
 
   // Same scene, same key; any parameter the reference depends on changes it.
   const std::string key = coverage_cache_key(truth);

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -98,6 +99,40 @@ TEST(SurfaceSamples, LieOnTheirElementsAndSkipBuriedFaces) {
       EXPECT_GT(p.normal.z(), -0.5);
     }
   }
+}
+
+// The streamed samples and those picked by index are the listed ones, in their order
+// (the coverage cache's key and the survey's missed samples read them so).
+TEST(SurfaceSamples, StreamedAndPickedAsTheyAreListed) {
+  const Scene s = load("lab");
+  const double spacing = 0.05;
+  const auto samples = surface_samples(s, spacing);
+  ASSERT_GT(samples.size(), 100000u);
+  auto same = [](const SurfaceSample& a, const SurfaceSample& b) {
+    return a.position == b.position && a.normal == b.normal && a.part.kind == b.part.kind &&
+           a.part.index == b.part.index;
+  };
+  std::size_t streamed = 0, differ = 0;
+  for_each_surface_sample(s, spacing, [&](const SurfaceSample& q) {
+    differ += streamed >= samples.size() || !same(q, samples[streamed]);
+    ++streamed;
+  });
+  EXPECT_EQ(streamed, samples.size());
+  EXPECT_EQ(differ, 0u);
+
+  // Every 997th, the first and the last; an index past the end is left out.
+  std::vector<std::uint32_t> picked{0};
+  for (std::size_t i = 997; i + 1 < samples.size(); i += 997) picked.push_back(std::uint32_t(i));
+  picked.push_back(std::uint32_t(samples.size() - 1));
+  std::size_t total = 0;
+  const auto at = surface_samples_at(s, spacing, picked, &total);
+  EXPECT_EQ(total, samples.size());
+  ASSERT_EQ(at.size(), picked.size());
+  for (std::size_t k = 0; k < picked.size(); ++k)
+    EXPECT_TRUE(same(at[k], samples[picked[k]])) << "index " << picked[k];
+  picked.push_back(std::uint32_t(samples.size()));
+  EXPECT_EQ(surface_samples_at(s, spacing, picked).size(), picked.size() - 1);
+  EXPECT_THROW(surface_samples_at(s, spacing, {5, 3}), std::invalid_argument);
 }
 
 TEST(SurfaceSamples, OpeningsHaveNoSamplesButTheirJambsDo) {

@@ -153,38 +153,70 @@ void sample_mesh(const MeshInstance& m, double spacing, PartRef part, Emit& emit
   }
 }
 
+// Every sample of the scene's surfaces, buried ones included, in a fixed order.
+template <class Emit>
+void each_sample(const Scene& scene, double spacing, Emit& emit) {
+  for (std::size_t i = 0; i < scene.walls.size(); ++i)
+    sample_wall(scene.walls[i], spacing, {PartKind::wall, static_cast<int>(i)}, emit);
+  for (std::size_t i = 0; i < scene.boxes.size(); ++i)
+    sample_box(scene.boxes[i], spacing, {PartKind::box, static_cast<int>(i)}, emit);
+  for (std::size_t i = 0; i < scene.cylinders.size(); ++i)
+    sample_cylinder(scene.cylinders[i], spacing, {PartKind::cylinder, static_cast<int>(i)}, emit);
+  for (std::size_t i = 0; i < scene.meshes.size(); ++i)
+    sample_mesh(scene.meshes[i], spacing, {PartKind::mesh, static_cast<int>(i)}, emit);
+}
+
+// Samples buried in another solid are dropped: just outside the surface must be free.
+bool exposed(const SolidModel& solids, const SurfaceSample& s, double spacing) {
+  const double offset = std::min(0.005, spacing / 4);
+  return !solids.contains(s.position + offset * s.normal, 0.0, false);
+}
+
 }  // namespace
 
 std::vector<SurfaceSample> surface_samples(const Scene& scene, double spacing) {
-  auto each_sample = [&](auto& emit) {
-    for (std::size_t i = 0; i < scene.walls.size(); ++i)
-      sample_wall(scene.walls[i], spacing, {PartKind::wall, static_cast<int>(i)}, emit);
-    for (std::size_t i = 0; i < scene.boxes.size(); ++i)
-      sample_box(scene.boxes[i], spacing, {PartKind::box, static_cast<int>(i)}, emit);
-    for (std::size_t i = 0; i < scene.cylinders.size(); ++i)
-      sample_cylinder(scene.cylinders[i], spacing, {PartKind::cylinder, static_cast<int>(i)}, emit);
-    for (std::size_t i = 0; i < scene.meshes.size(); ++i)
-      sample_mesh(scene.meshes[i], spacing, {PartKind::mesh, static_cast<int>(i)}, emit);
-  };
-  // Samples buried in another solid are dropped: just outside the surface must be free.
   // Two passes over the same samples, the first to judge and count them, so that the
-  // result is allocated once at its size (a scene's samples run to hundreds of MB).
+  // result is allocated once at its size.
   const SolidModel solids(scene);
-  const double offset = std::min(0.005, spacing / 4);
-  std::vector<bool> exposed;
+  std::vector<bool> kept_flags;
   std::size_t kept = 0;
   auto judge = [&](const SurfaceSample& s) {
-    exposed.push_back(!solids.contains(s.position + offset * s.normal, 0.0, false));
-    kept += exposed.back();
+    kept_flags.push_back(exposed(solids, s, spacing));
+    kept += kept_flags.back();
   };
-  each_sample(judge);
+  each_sample(scene, spacing, judge);
   std::vector<SurfaceSample> out;
   out.reserve(kept);
   std::size_t next = 0;
   auto keep_exposed = [&](const SurfaceSample& s) {
-    if (exposed[next++]) out.push_back(s);
+    if (kept_flags[next++]) out.push_back(s);
   };
-  each_sample(keep_exposed);
+  each_sample(scene, spacing, keep_exposed);
+  return out;
+}
+
+void for_each_surface_sample(const Scene& scene, double spacing,
+                             const std::function<void(const SurfaceSample&)>& f) {
+  const SolidModel solids(scene);
+  auto emit_exposed = [&](const SurfaceSample& s) {
+    if (exposed(solids, s, spacing)) f(s);
+  };
+  each_sample(scene, spacing, emit_exposed);
+}
+
+std::vector<SurfaceSample> surface_samples_at(const Scene& scene, double spacing,
+                                              const std::vector<std::uint32_t>& indices,
+                                              std::size_t* total) {
+  if (!std::is_sorted(indices.begin(), indices.end()))
+    throw std::invalid_argument("surface_samples_at: the indices must be ascending");
+  std::vector<SurfaceSample> out;
+  out.reserve(indices.size());
+  std::size_t index = 0;
+  for_each_surface_sample(scene, spacing, [&](const SurfaceSample& s) {
+    while (out.size() < indices.size() && indices[out.size()] == index) out.push_back(s);
+    ++index;
+  });
+  if (total) *total = index;
   return out;
 }
 

@@ -61,17 +61,11 @@ std::uint64_t mix(std::uint64_t x) {
   return x ^ (x >> 31);
 }
 
-struct RowResult {
-  std::vector<Eigen::Vector3f> points;
-  std::vector<float> intensity;
-  std::vector<std::uint32_t> col;
-};
-
 }  // namespace
 
-Scan scan(const RayCaster& caster, const ScannerConfig& config, const Pose2& pose,
-          const ScanOptions& options) {
-  Scan out;
+std::vector<ScanRow> scan_rows(const RayCaster& caster, const ScannerConfig& config,
+                               const Pose2& pose, const ScanOptions& options, Scan& out) {
+  out = Scan();
   out.pose = pose;
   out.sensor_height = config.height;
   out.grid = scan_grid(config);
@@ -94,7 +88,7 @@ Scan scan(const RayCaster& caster, const ScannerConfig& config, const Pose2& pos
   // inside it with noise; the measured range decides what is kept.
   const float t_far = static_cast<float>(config.max_range + 6 * sigma);
 
-  std::vector<RowResult> rows(g.rows);
+  std::vector<ScanRow> rows(g.rows);
   std::atomic<std::uint32_t> next_row{0};
   std::atomic<std::uint32_t> rows_done{0};
   auto work = [&](bool report) {
@@ -130,7 +124,7 @@ Scan scan(const RayCaster& caster, const ScannerConfig& config, const Pose2& pos
           noise[c + 1] = radius * std::sin(angle);
         }
       }
-      RowResult& row = rows[r];
+      ScanRow& row = rows[r];
       row.points.reserve(g.cols);
       if (options.with_grid_indices) row.col.reserve(g.cols);
       if (options.with_intensity) row.intensity.reserve(g.cols);
@@ -152,6 +146,15 @@ Scan scan(const RayCaster& caster, const ScannerConfig& config, const Pose2& pos
   const unsigned threads = std::min<unsigned>(detail::thread_count(options.threads), g.rows);
   detail::run_on_threads(threads, work);
   if (options.progress) options.progress(g.rows, g.rows);
+  return rows;
+}
+
+Scan scan(const RayCaster& caster, const ScannerConfig& config, const Pose2& pose,
+          const ScanOptions& options) {
+  Scan out;
+  std::vector<ScanRow> rows = scan_rows(caster, config, pose, options, out);
+  const ScanGrid& g = out.grid;
+  const unsigned threads = std::min<unsigned>(detail::thread_count(options.threads), g.rows);
 
   // Gather the rows in grid order, in parallel as well (a fine scan is ~100 MB).
   std::vector<std::size_t> offset(g.rows + 1, 0);
@@ -166,7 +169,7 @@ Scan scan(const RayCaster& caster, const ScannerConfig& config, const Pose2& pos
   std::atomic<std::uint32_t> next_copy{0};
   detail::run_on_threads(threads, [&](bool) {
     for (std::uint32_t r = next_copy++; r < g.rows; r = next_copy++) {
-      RowResult& row = rows[r];
+      ScanRow& row = rows[r];
       std::copy(row.points.begin(), row.points.end(),
                 out.points.begin() + static_cast<long>(offset[r]));
       if (options.with_grid_indices) {
@@ -176,7 +179,7 @@ Scan scan(const RayCaster& caster, const ScannerConfig& config, const Pose2& pos
       if (options.with_intensity)
         std::copy(row.intensity.begin(), row.intensity.end(),
                   out.intensity.begin() + static_cast<long>(offset[r]));
-      row = RowResult();  // free as we go
+      row = ScanRow();  // free as we go
     }
   });
   return out;

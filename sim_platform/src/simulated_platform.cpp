@@ -11,13 +11,18 @@ namespace semioctree::sim_platform {
 
 namespace {
 
-sim::Scan scan_at(const SimulatedPlatform& p, const sim::Pose2& pose, std::uint64_t seed) {
+// Points only: no intensity, no grid indices.
+sim::ScanOptions points_only(const SimulatedPlatform& p, std::uint64_t seed) {
   sim::ScanOptions so;
   so.seed = seed;
   so.threads = p.threads();
   so.with_intensity = false;
   so.with_grid_indices = false;
-  return sim::scan(p.caster(), p.scene().scanner, pose, so);
+  return so;
+}
+
+sim::Scan scan_at(const SimulatedPlatform& p, const sim::Pose2& pose, std::uint64_t seed) {
+  return sim::scan(p.caster(), p.scene().scanner, pose, points_only(p, seed));
 }
 
 }  // namespace
@@ -59,12 +64,21 @@ IncomingScan SimulatedPlatform::scan() {
   IncomingScan in;
   Eigen::Vector3d origin;
   {
-    const sim::Scan s = scan_at(*this, robot_.true_pose(), seed_ * 1000 + std::uint64_t(i));
+    // Row by row into the cloud, each row freed once copied: the scan is never held twice.
+    sim::Scan s;
+    std::vector<sim::ScanRow> rows =
+        sim::scan_rows(*caster_, scene_.scanner, robot_.true_pose(),
+                       points_only(*this, seed_ * 1000 + std::uint64_t(i)), s);
     last_sensor_to_world_ = s.sensor_to_world();
     origin = s.origin();
+    std::size_t total = 0;
+    for (const sim::ScanRow& row : rows) total += row.points.size();
     auto cloud = std::make_shared<Cloud>();
-    cloud->reserve(s.points.size());
-    for (const Eigen::Vector3f& q : s.points) cloud->push_back({q.x(), q.y(), q.z()});
+    cloud->reserve(total);
+    for (sim::ScanRow& row : rows) {
+      for (const Eigen::Vector3f& q : row.points) cloud->push_back({q.x(), q.y(), q.z()});
+      row = sim::ScanRow();
+    }
     in.points = cloud;
     last_points_ = cloud;
   }

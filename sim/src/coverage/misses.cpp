@@ -25,9 +25,7 @@ std::vector<std::size_t> missed_of(const std::vector<bool>& covered) {
 // One flag per missed sample: sample_visible_from one of the optical centres (the walls
 // prepared once).
 std::vector<std::uint8_t> in_view_flags(const GroundTruth& truth,
-                                        const std::vector<SurfaceSample>& samples,
-                                        const CoverageReference& reference,
-                                        const std::vector<std::size_t>& missed,
+                                        const std::vector<SurfaceSample>& missed,
                                         const std::vector<Eigen::Vector3d>& optical_centres,
                                         unsigned threads) {
   const detail::ScannerLimits lim = detail::scanner_limits(truth.scene().scanner);
@@ -42,7 +40,7 @@ std::vector<std::uint8_t> in_view_flags(const GroundTruth& truth,
   auto work = [&](bool) {
     std::vector<double> target_offsets(walls.size());
     for (std::size_t m; (m = next.fetch_add(1)) < missed.size();) {
-      const SurfaceSample& s = samples[reference.visible[missed[m]]];
+      const SurfaceSample& s = missed[m];
       const Eigen::Vector3d target = detail::segment_target(s);
       detail::wall_offsets(walls, target, target_offsets.data());
       for (std::size_t k = 0; k < optical_centres.size() && !in_view[m]; ++k) {
@@ -62,8 +60,8 @@ std::vector<std::uint8_t> in_view_flags(const GroundTruth& truth,
 }
 
 // The counts, per scene element too (most missed first), and the lists of samples.
-MissedSamples tally(const GroundTruth& truth, const std::vector<SurfaceSample>& samples,
-                    const CoverageReference& reference, const std::vector<std::size_t>& missed,
+MissedSamples tally(const GroundTruth& truth, const std::vector<std::size_t>& missed,
+                    const std::vector<SurfaceSample>& missed_samples,
                     const std::vector<std::uint8_t>& in_view) {
   MissedSamples out;
   std::vector<MissedPart> parts;
@@ -74,7 +72,7 @@ MissedSamples tally(const GroundTruth& truth, const std::vector<SurfaceSample>& 
     return parts.back();
   };
   for (std::size_t m = 0; m < missed.size(); ++m) {
-    MissedPart& part = part_of(samples[reference.visible[missed[m]]].part);
+    MissedPart& part = part_of(missed_samples[m].part);
     if (in_view[m]) {
       ++out.in_view;
       ++part.in_view;
@@ -110,13 +108,19 @@ MissedSamples explain_missed_samples(const GroundTruth& truth, const CoverageRef
                                      unsigned threads) {
   if (covered.size() != reference.visible.size())
     throw std::invalid_argument("explain_missed_samples: one covered flag per reference sample");
-  const std::vector<SurfaceSample> samples = truth.surface_samples(reference.sample_spacing);
-  if (samples.size() != reference.sample_count)
-    throw std::invalid_argument("explain_missed_samples: the reference is of another scene");
+  // Only the missed samples are kept (all of a large scene's run to hundreds of MB).
   const std::vector<std::size_t> missed = missed_of(covered);
+  std::vector<std::uint32_t> sample_indices;
+  sample_indices.reserve(missed.size());
+  for (std::size_t m : missed) sample_indices.push_back(reference.visible[m]);
+  std::size_t sample_count = 0;
+  const std::vector<SurfaceSample> missed_samples =
+      surface_samples_at(truth.scene(), reference.sample_spacing, sample_indices, &sample_count);
+  if (sample_count != reference.sample_count)
+    throw std::invalid_argument("explain_missed_samples: the reference is of another scene");
   const std::vector<std::uint8_t> in_view =
-      in_view_flags(truth, samples, reference, missed, optical_centres, threads);
-  return tally(truth, samples, reference, missed, in_view);
+      in_view_flags(truth, missed_samples, optical_centres, threads);
+  return tally(truth, missed, missed_samples, in_view);
 }
 
 }  // namespace semioctree::sim

@@ -298,6 +298,14 @@ void fill_points(const std::vector<SurfaceSample>& samples, CoverageReference& r
   for (std::uint32_t i : ref.visible) ref.points.push_back(samples[i].position);
 }
 
+// fill_points from the samples streamed, none held.
+void fill_points(const GroundTruth& truth, CoverageReference& ref) {
+  ref.points.clear();
+  ref.points.reserve(ref.visible.size());
+  for (const SurfaceSample& s : surface_samples_at(truth.scene(), ref.sample_spacing, ref.visible))
+    ref.points.push_back(s.position);
+}
+
 // coverage_grid_positions on the floor plan `plan` of the scene.
 std::vector<Eigen::Vector3d> grid_positions(const GroundTruth& truth, const FloorPlan& plan,
                                             double grid_spacing) {
@@ -358,7 +366,9 @@ double coverage_sample_spacing(const GroundTruth& truth, double finest, std::siz
   check_sample_spacing(finest);
   // The surface's area from a coarse sampling (a sample per coarse² of surface).
   const double coarse = std::max(finest, 0.1);
-  const double area = static_cast<double>(truth.surface_samples(coarse).size()) * coarse * coarse;
+  std::size_t coarse_samples = 0;
+  for_each_surface_sample(truth.scene(), coarse, [&](const SurfaceSample&) { ++coarse_samples; });
+  const double area = static_cast<double>(coarse_samples) * coarse * coarse;
   if (area / (finest * finest) <= static_cast<double>(max_samples)) return finest;
   return std::ceil(std::sqrt(area / static_cast<double>(std::max<std::size_t>(max_samples, 1))) *
                    1000.0) /
@@ -371,7 +381,8 @@ CoverageReference compute_coverage_reference(const GroundTruth& truth, double gr
   const double sample_spacing = coverage_sample_spacing(truth, finest_spacing);
   const std::vector<SurfaceSample> samples = truth.surface_samples(sample_spacing);
   CoverageReference ref = compute(truth, samples, grid_spacing, sample_spacing, threads);
-  ref.key = detail::reference_key(truth, samples, grid_spacing, sample_spacing);
+  ref.key = detail::reference_key(truth, detail::digest_of_samples(samples), grid_spacing,
+                                  sample_spacing);
   ref.seconds = seconds_since(t0);
   return ref;
 }
@@ -382,23 +393,29 @@ CoverageReference load_or_compute_coverage_reference(const GroundTruth& truth,
                                                      unsigned threads) {
   const auto t0 = Clock::now();
   const double sample_spacing = coverage_sample_spacing(truth, finest_spacing);
-  const std::vector<SurfaceSample> samples = truth.surface_samples(sample_spacing);
-  const std::string key = detail::reference_key(truth, samples, grid_spacing, sample_spacing);
+  // The samples are streamed for the key and, from the cache, for the points: held only
+  // when the reference is computed (a large scene's run to hundreds of MB).
+  const detail::SamplesDigest digest = detail::digest_of_samples(truth, sample_spacing);
+  const std::string key = detail::reference_key(truth, digest, grid_spacing, sample_spacing);
+  auto compute_here = [&] {
+    CoverageReference r = compute(truth, truth.surface_samples(sample_spacing), grid_spacing,
+                                  sample_spacing, threads);
+    r.key = key;
+    return r;
+  };
   CoverageReference ref;
   if (cache_dir.empty()) {
-    ref = compute(truth, samples, grid_spacing, sample_spacing, threads);
-    ref.key = key;
+    ref = compute_here();
   } else {
     const std::filesystem::path file = detail::cache_file_path(cache_dir, key);
-    if (detail::read_cached_reference(file, key, grid_spacing, sample_spacing, samples.size(),
+    if (detail::read_cached_reference(file, key, grid_spacing, sample_spacing, digest.count(),
                                       ref)) {
       ref.key = key;
       ref.from_cache = true;
       ref.cache_file = file.string();
-      fill_points(samples, ref);
+      fill_points(truth, ref);
     } else {
-      ref = compute(truth, samples, grid_spacing, sample_spacing, threads);
-      ref.key = key;
+      ref = compute_here();
       if (detail::write_cached_reference(file, ref)) ref.cache_file = file.string();
     }
   }

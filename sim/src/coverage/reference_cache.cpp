@@ -141,7 +141,20 @@ bool write_atomically(const fs::path& path, const std::string& data) {
 
 }  // namespace
 
-std::string reference_key(const GroundTruth& truth, const std::vector<SurfaceSample>& samples,
+SamplesDigest digest_of_samples(const GroundTruth& truth, double sample_spacing) {
+  SamplesDigest digest;
+  for_each_surface_sample(truth.scene(), sample_spacing,
+                          [&](const SurfaceSample& s) { digest.add(s); });
+  return digest;
+}
+
+SamplesDigest digest_of_samples(const std::vector<SurfaceSample>& samples) {
+  SamplesDigest digest;
+  for (const SurfaceSample& s : samples) digest.add(s);
+  return digest;
+}
+
+std::string reference_key(const GroundTruth& truth, const SamplesDigest& samples,
                           double grid_spacing, double sample_spacing) {
   ContentHash h;
   h.text("semioctree-coverage-reference");
@@ -167,11 +180,8 @@ std::string reference_key(const GroundTruth& truth, const std::vector<SurfaceSam
   for (const auto& v : tri.vertices) h.bytes(v.data(), 3 * sizeof(float));
   h.value(static_cast<std::uint64_t>(tri.triangles.size()));
   for (const auto& t : tri.triangles) h.bytes(t.data(), 3 * sizeof(std::uint32_t));
-  h.value(static_cast<std::uint64_t>(samples.size()));
-  for (const auto& smp : samples) {
-    h.bytes(smp.position.data(), 3 * sizeof(double));
-    h.bytes(smp.normal.data(), 3 * sizeof(double));
-  }
+  h.value(static_cast<std::uint64_t>(samples.count()));
+  h.text(samples.hex());
   return h.hex();
 }
 
@@ -195,8 +205,8 @@ bool write_cached_reference(const std::filesystem::path& file, const CoverageRef
 
 std::string coverage_cache_key(const GroundTruth& truth, double grid_spacing,
                                double sample_spacing) {
-  return detail::reference_key(truth, truth.surface_samples(sample_spacing), grid_spacing,
-                               sample_spacing);
+  return detail::reference_key(truth, detail::digest_of_samples(truth, sample_spacing),
+                               grid_spacing, sample_spacing);
 }
 
 std::string default_cache_dir() {

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "coverage/content_hash.h"
 #include "semioctree/sim/coverage/reference.h"
 #include "semioctree/sim/ground_truth.h"
 
@@ -22,8 +23,30 @@ constexpr std::uint32_t kCoverageRuleVersion = 5;
 // The floor-plan cell coverage_grid_positions finds the survey area with (part of the key).
 constexpr double kCoveragePlanCell = 0.05;
 
-// The cache key (coverage_cache_key) of the reference of `truth` from its `samples`.
-std::string reference_key(const GroundTruth& truth, const std::vector<SurfaceSample>& samples,
+// The digest of a scene's surface samples, taken one at a time in their order (a scene's
+// samples need not be held to key its reference).
+class SamplesDigest {
+ public:
+  void add(const SurfaceSample& s) {
+    hash_.bytes(s.position.data(), 3 * sizeof(double));
+    hash_.bytes(s.normal.data(), 3 * sizeof(double));
+    ++count_;
+  }
+  std::size_t count() const { return count_; }
+  std::string hex() const { return hash_.hex(); }  // of the positions and normals
+
+ private:
+  ContentHash hash_;
+  std::size_t count_ = 0;
+};
+
+// The digest of the samples GroundTruth::surface_samples(sample_spacing) returns,
+// streamed; and of samples at hand.
+SamplesDigest digest_of_samples(const GroundTruth& truth, double sample_spacing);
+SamplesDigest digest_of_samples(const std::vector<SurfaceSample>& samples);
+
+// The cache key (coverage_cache_key) of the reference of `truth` from its samples' digest.
+std::string reference_key(const GroundTruth& truth, const SamplesDigest& samples,
                           double grid_spacing, double sample_spacing);
 
 // `<cache_dir>/coverage-<key>.bin`.

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -39,6 +40,16 @@ std::vector<OpeningRect> opening_rects(const Scene& scene);
 // Samples buried in another solid (e.g. the bottom of a box standing on the floor, a
 // wall end inside the next wall) are left out. Deterministic.
 std::vector<SurfaceSample> surface_samples(const Scene& scene, double spacing = 0.02);
+// The same samples, in the same order, handed to `f` one at a time and not kept (a large
+// scene's samples run to hundreds of MB; a caller that needs a few of them keeps those).
+void for_each_surface_sample(const Scene& scene, double spacing,
+                             const std::function<void(const SurfaceSample&)>& f);
+// The samples of surface_samples(scene, spacing) at `indices` (ascending), in that order,
+// without holding the others (indices beyond the last sample are left out); `total`, if
+// given, gets the number of all the samples.
+std::vector<SurfaceSample> surface_samples_at(const Scene& scene, double spacing,
+                                              const std::vector<std::uint32_t>& indices,
+                                              std::size_t* total = nullptr);
 
 // Rooms and walkable floor, on a square grid of `cell` metres covering the scene.
 struct FloorPlan {
