@@ -236,45 +236,105 @@ HeightPeak fit_peak(const std::vector<float>& all_z, double guess, const Preproc
   return peak;
 }
 
-// The q-quantile of the points' heights, nudged just above so that the point
-// itself lies below it (the map keeps z < height); none for an empty cloud.
-std::optional<double> top_of_points(const Cloud& cloud, double q) {
-  if (cloud.empty()) return std::nullopt;
-  std::vector<float> z(cloud.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i) z[i] = cloud[i].z;
+// The q-quantile of the heights, nudged just above so that its point itself lies below
+// it (the map keeps z < height); none for no heights.
+std::optional<double> top_of_heights(std::vector<float> z, double q) {
+  if (z.empty()) return std::nullopt;
   const auto k = std::size_t(std::clamp(q, 0.0, 1.0) * double(z.size() - 1));
   std::nth_element(z.begin(), z.begin() + std::ptrdiff_t(k), z.end());
   return std::nextafter(double(z[k]), std::numeric_limits<double>::infinity());
 }
 
-}  // namespace
+// Inserts keys into a table a batch at a time, each batch's slots prefetched first: a
+// table of hundreds of thousands of cells misses the cache on nearly every insertion, and
+// the misses of a batch then overlap. The keys go in in the order given.
+class BatchedInsert {
+ public:
+  explicit BatchedInsert(PackedKeyMap<std::uint8_t>& cells) : cells_(cells) {}
+  // Queues `key` (PackedKeyMap's kNoKey: a point that counts as read but has no cell);
+  // `inserted(key)` is called as each one goes in, in order, and returns false to stop.
+  template <class Inserted>
+  bool add(std::uint64_t key, const Inserted& inserted) {
+    keys_[n_++] = key;
+    return n_ < kBatch || flush(inserted);
+  }
+  template <class Inserted>
+  bool flush(const Inserted& inserted) {
+    for (std::size_t j = 0; j < n_; ++j)
+      if (keys_[j] != kNone) cells_.prefetch(keys_[j]);
+    const std::size_t n = n_;
+    n_ = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+      if (keys_[j] != kNone) cells_.insert(keys_[j]);
+      if (!inserted(keys_[j])) return false;
+    }
+    return true;
+  }
 
-// One table of at most cap + 1 keys first; past that, the parts are as many as keep
-// each table near the cap, from the share of the points read when the first one filled
-// (a scan's points sweep its surfaces in order).
-std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap) {
+ private:
+  static constexpr std::size_t kBatch = 16;
+  static constexpr std::uint64_t kNone = PackedKeyMap<std::uint8_t>::kNoKey;
+  PackedKeyMap<std::uint8_t>& cells_;
+  std::uint64_t keys_[kBatch];
+  std::size_t n_ = 0;
+};
+
+// count_cells over the points `each_point` streams: each_point(f) calls f(q) for each
+// point in order and stops when f returns false; `size` is their number.
+template <class EachPoint>
+std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double spacing,
+                           std::size_t cap) {
+  // One table of at most cap + 1 keys first; past that, the parts are as many as keep
+  // each table near the cap, from the share of the points read when the first one filled
+  // (a scan's points sweep its surfaces in order).
   cap = std::max<std::size_t>(cap, 1);
   const double inv = 1.0 / spacing;
+  constexpr std::uint64_t kNone = PackedKeyMap<std::uint8_t>::kNoKey;
   std::size_t read = 0;
   {
-    PackedKeyMap<std::uint8_t> cells(std::min(cloud.size(), cap + 1));
-    for (; read < cloud.size() && cells.size() <= cap; ++read)
-      if (finite(cloud[read])) cells.insert(cell_key(cloud[read], inv));
+    PackedKeyMap<std::uint8_t> cells(std::min(size, cap + 1));
+    BatchedInsert batch(cells);
+    auto counted = [&](std::uint64_t) {
+      ++read;
+      return cells.size() <= cap;
+    };
+    bool more = true;
+    each_point([&](const pcl::PointXYZ& q) {
+      return more = batch.add(finite(q) ? cell_key(q, inv) : kNone, counted);
+    });
+    if (more) batch.flush(counted);
     if (cells.size() <= cap) return cells.size();
   }
-  const double estimate = double(cap) * double(cloud.size()) / double(read);
+  const double estimate = double(cap) * double(size) / double(read);
   const std::uint64_t parts = std::uint64_t(std::ceil(1.25 * estimate / double(cap)));
   std::size_t count = 0;
+  auto go_on = [](std::uint64_t) { return true; };
   for (std::uint64_t part = 0; part < parts; ++part) {
     PackedKeyMap<std::uint8_t> cells(cap);
-    for (const pcl::PointXYZ& q : cloud) {
-      if (!finite(q)) continue;
+    BatchedInsert batch(cells);
+    each_point([&](const pcl::PointXYZ& q) {
+      if (!finite(q)) return true;
       const std::uint64_t k = cell_key(q, inv);
-      if ((k * 0x9E3779B97F4A7C15ull >> 32) % parts == part) cells.insert(k);
-    }
+      return (k * 0x9E3779B97F4A7C15ull >> 32) % parts != part || batch.add(k, go_on);
+    });
+    batch.flush(go_on);
     count += cells.size();
   }
   return count;
+}
+
+// The points of `cloud`, in order, for count_cells_of.
+auto points_of(const Cloud& cloud) {
+  return [&cloud](auto&& f) {
+    for (const pcl::PointXYZ& q : cloud)
+      if (!f(q)) return;
+  };
+}
+
+}  // namespace
+
+std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap) {
+  return count_cells_of(cloud.size(), points_of(cloud), spacing, cap);
 }
 
 CellThinning::CellThinning(double spacing) : inv_(1.0 / spacing), kept_(new Cloud) {
@@ -282,30 +342,32 @@ CellThinning::CellThinning(double spacing) : inv_(1.0 / spacing), kept_(new Clou
   kept_->is_dense = true;
 }
 
-void CellThinning::add(const Cloud& points) {
+void CellThinning::add(const pcl::PointXYZ& q) {
   // Per cell, the index of its point in kept_ and that point's squared distance from the
   // cell's centre (in cells); a point nearer the centre replaces it (PCL's UniformSampling
   // keeps the same points, at three times the time: docs/data-flow.md, "Decimation").
-  auto centre_offset2 = [&](const pcl::PointXYZ& q) {
+  if (!finite(q)) return;
+  auto centre_offset2 = [&](const pcl::PointXYZ& p) {
     auto d = [&](float v) {
       const double t = double(v) * inv_;
       return t - std::floor(t) - 0.5;
     };
-    return float(d(q.x) * d(q.x) + d(q.y) * d(q.y) + d(q.z) * d(q.z));
+    return float(d(p.x) * d(p.x) + d(p.y) * d(p.y) + d(p.z) * d(p.z));
   };
   Cloud& kept = *kept_;
-  for (const pcl::PointXYZ& q : points) {
-    if (!finite(q)) continue;
-    const auto [index, added] = slot_.try_emplace(cell_key(q, inv_), std::uint32_t(kept.size()));
-    const float o2 = centre_offset2(q);
-    if (added) {
-      kept.push_back(q);
-      offset2_.push_back(o2);
-    } else if (o2 < offset2_[*index]) {
-      kept[*index] = q;
-      offset2_[*index] = o2;
-    }
+  const auto [index, added] = slot_.try_emplace(cell_key(q, inv_), std::uint32_t(kept.size()));
+  const float o2 = centre_offset2(q);
+  if (added) {
+    kept.push_back(q);
+    offset2_.push_back(o2);
+  } else if (o2 < offset2_[*index]) {
+    kept[*index] = q;
+    offset2_[*index] = o2;
   }
+}
+
+void CellThinning::add(const Cloud& points) {
+  for (const pcl::PointXYZ& q : points) add(q);
 }
 
 Cloud::Ptr CellThinning::release() {
@@ -450,17 +512,19 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
       in_band[i] = true;
     }
   }
-  z = {};  // (levelled again below, to the same floats: freed before the cut cloud grows)
-  Cloud::Ptr cut(new Cloud);
-  cut->reserve(input.size() - r.floor.removed - r.ceiling.removed);
-  for (std::size_t i = 0; i < input.size(); ++i) {
-    if (in_band[i]) continue;
-    pcl::PointXYZ v = pcl::transformPoint(input[i], rotate);
-    v.z = float(double(v.z) + dz);
-    cut->push_back(v);
-  }
-  cut->header = pcl::PCLHeader();
-  cut->is_dense = true;
+  z = {};  // (levelled again below, to the same floats)
+  // The cut cloud (the points kept, levelled) is streamed, not stored: decimation reads it
+  // a few times, levelling each point again, and keeps only what it decimates to (a scan
+  // of 5.4 M points would hold another 4.5 M beside it: docs/data-flow.md, "Memory").
+  const std::size_t after_cut = input.size() - r.floor.removed - r.ceiling.removed;
+  auto each_cut = [&](auto&& f) {
+    for (std::size_t i = 0; i < input.size(); ++i) {
+      if (in_band[i]) continue;
+      pcl::PointXYZ v = pcl::transformPoint(input[i], rotate);
+      v.z = float(double(v.z) + dz);
+      if (!f(v)) return;
+    }
+  };
   // The room's height: given, the ceiling's, or the top of the points left.
   if (p.ceiling_height > 0) {
     r.ceiling_height = p.ceiling_height;
@@ -469,7 +533,13 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     r.ceiling_height = r.ceiling.center;
     r.height_from = RoomHeightFrom::kCeiling;
   } else {
-    const std::optional<double> top = top_of_points(*cut, p.top_quantile);
+    std::vector<float> heights;
+    heights.reserve(after_cut);
+    each_cut([&](const pcl::PointXYZ& v) {
+      heights.push_back(v.z);
+      return true;
+    });
+    const std::optional<double> top = top_of_heights(std::move(heights), p.top_quantile);
     if (!top || !(*top > 0)) {
       std::ostringstream m;
       m << "found a floor but no ceiling (no horizontal surface at least " << p.min_room_height
@@ -480,11 +550,11 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     r.ceiling_height = *top;
     r.height_from = RoomHeightFrom::kPoints;
   }
-  r.after_cut = cut->size();
+  r.after_cut = after_cut;
 
   // Decimation: a fixed spacing, or the spacing that gives about the target count.
   double spacing = p.min_spacing;
-  if (p.target_points > 0 && cut->size() > p.target_points) {
+  if (p.target_points > 0 && after_cut > p.target_points) {
     // The spacing that leaves about the target: count the cells of a trial spacing (the
     // partition decimate keeps one point of) with a fast hash set, and update the spacing
     // by the secant of log(count) over log(spacing) (≈ −2 for surfaces). Aim 1 % under
@@ -495,14 +565,15 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     const double target = double(p.target_points);
     // A table of at most twice the target at once (count_cells).
     const std::size_t cap = 2 * p.target_points;
-    double s0 = std::max(spacing, 0.01), c0 = double(count_cells(*cut, s0, cap));
+    auto count_cut = [&](double s) { return double(count_cells_of(after_cut, each_cut, s, cap)); };
+    double s0 = std::max(spacing, 0.01), c0 = count_cut(s0);
     double s1 = std::max(spacing, s0 * std::sqrt(c0 / goal));
     // The finest spacing tried that keeps at most the target: on regular
     // (synthetic) grids the count jumps with the cells' phase and the secant
     // may not settle, so the result is always a spacing that was counted.
     double best = c0 <= target ? s0 : 0, best_count = c0 <= target ? c0 : 0;
     for (int counts = 1; counts < kMaxCounts; ++counts) {
-      const double c1 = double(count_cells(*cut, s1, cap));
+      const double c1 = count_cut(s1);
       if (c1 <= target && c1 > best_count) best = s1, best_count = c1;
       if (c1 <= target && c1 >= 0.97 * target) break;
       double slope = (std::log(c1) - std::log(c0)) / (std::log(s1) - std::log(s0));
@@ -513,11 +584,26 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
       if (c1 > target && s1 <= s0) s1 = s0 * 1.01;  // must get coarser
     }
     for (double s = std::max(s1, s0); best == 0; s *= 1.05)  // none small enough yet
-      if (double(count_cells(*cut, s, cap)) <= target) best = s;
+      if (count_cut(s) <= target) best = s;
     spacing = best;
   }
-  const Cloud::Ptr decimated = spacing > 0 ? decimate(*cut, spacing) : cut;
-  r.cloud = decimated;
+  if (spacing > 0) {
+    CellThinning thinning(spacing);
+    each_cut([&](const pcl::PointXYZ& v) {
+      thinning.add(v);
+      return true;
+    });
+    r.cloud = thinning.release();
+  } else {
+    Cloud::Ptr cut(new Cloud);
+    cut->reserve(after_cut);
+    each_cut([&](const pcl::PointXYZ& v) {
+      cut->push_back(v);
+      return true;
+    });
+    cut->is_dense = true;
+    r.cloud = cut;
+  }
   r.decimation_spacing = spacing;
   r.output_points = r.cloud->size();
   return r;

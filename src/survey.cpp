@@ -183,9 +183,15 @@ GlobalAlignResult Survey::recover_by_global_alignment(
   }
 }
 
-const ScanRecord& Survey::add_scan(const IncomingScan& in,
-                                   const std::optional<Point3>& robot_position,
+const ScanRecord& Survey::add_scan(IncomingScan in, const std::optional<Point3>& robot_position,
                                    std::optional<double> predicted_overlap) {
+  return add_scan_telling(std::move(in), robot_position, predicted_overlap, nullptr);
+}
+
+const ScanRecord& Survey::add_scan_telling(
+    IncomingScan in, const std::optional<Point3>& robot_position,
+    std::optional<double> predicted_overlap,
+    const std::function<void(const Eigen::Isometry3d&)>& placed) {
   const auto t_total = Clock::now();
   ScanRecord rec;
   rec.index = records_.size();
@@ -194,7 +200,7 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
   // Stage 1: drop the returns outside the scanner's limits (its mount, the robot), level
   // this scan in its own frame, then place it by the reported pose.
   auto t0 = Clock::now();
-  const Cloud::Ptr seen = within_limits(in.points, params_.map.limits, &rec.points_outside_limits);
+  Cloud::Ptr seen = within_limits(in.points, params_.map.limits, &rec.points_outside_limits);
   const PreprocessResult pre = preprocess(*seen, params_.preprocess);
   rec.points_kept = pre.output_points;
   rec.ceiling_height = pre.ceiling_height;
@@ -314,6 +320,7 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
     throw RegistrationError(m);
   }
   if (rec.registration) observer_->stage_done(SurveyStage::kRegistered, rec);
+  if (placed) placed(rec.scanner_to_survey);
 
   // Stages 3-5 (8 for later scans): occupancy, openings, occlusion.
   ReturnDirectionsOptions returns;
@@ -331,6 +338,9 @@ const ScanRecord& Survey::add_scan(const IncomingScan& in,
   std::shared_ptr<const ReturnDirections> seen_directions =
       return_directions(*seen, rec.scanner_to_survey.linear(), returns);
   rec.seconds.returns = seconds_since(t0);
+  // The scan's points are read (placed, levelled, decimated, their directions binned).
+  seen.reset();
+  in.points.reset();
   rec.update = map_.add_scan(*registered, scanner, pre.ceiling_height, std::move(seen_directions));
   rec.seconds.occupancy = rec.update.seconds_occupancy;
   rec.seconds.openings = rec.update.seconds_openings;
@@ -750,10 +760,11 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
   std::vector<Point3> failed_in_a_row;  // where the scans since the last placed one failed
   double failed_path_m = 0;             // the path from the last placed scan to the first
   for (std::size_t i = records_.size(); i < params_.max_scans;) {
-    const IncomingScan in = platform.scan();
+    IncomingScan in = platform.scan();
     observer_->scan_taken(i, in);
     try {
-      add_scan(in, std::nullopt, predicted);
+      add_scan_telling(std::move(in), std::nullopt, predicted,
+                       [&](const Eigen::Isometry3d& pose) { platform.placed(pose); });
     } catch (const RegistrationError& e) {
       platform.rejected();
       RegistrationFailure f;
@@ -797,7 +808,6 @@ SurveyOutcome Survey::run(ScanPlatform& platform, NextScanPolicy& policy) {
     records_.back().path_m = path;
     records_.back().route = route;
     const ScanRecord& rec = records_.back();
-    platform.placed(rec.scanner_to_survey);
     observer_->scan_done(rec, map_);
     if (!rec.nbv.best) {
       out.stopped_because = StopReason::kNoCandidate;

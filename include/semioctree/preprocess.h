@@ -102,6 +102,7 @@ class CellThinning {
   CellThinning(CellThinning&&) = default;
   CellThinning& operator=(CellThinning&&) = default;
   void add(const Cloud& points);
+  void add(const pcl::PointXYZ& point);  // one point (a non-finite one is skipped)
   const Cloud& cloud() const { return *kept_; }
   Cloud::Ptr release();  // the kept cloud, handed over (the thinning is empty after)
   double spacing() const { return 1.0 / inv_; }

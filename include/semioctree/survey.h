@@ -230,7 +230,8 @@ class ScanPlatform {
   virtual ~ScanPlatform() = default;
   // A scan at the current position.
   virtual IncomingScan scan() = 0;
-  // The survey placed the last scan at this pose (survey frame).
+  // The survey placed the last scan at this pose (survey frame): Survey::run calls it as
+  // soon as the scan is placed, before the map is updated with it.
   virtual void placed(const Eigen::Isometry3d& scanner_to_survey) { (void)scanner_to_survey; }
   // The survey could not place the last scan: it is dropped, and the odometry of the
   // leg runs on from the last placed scan.
@@ -293,7 +294,9 @@ class Survey {
   // Throws RegistrationError (the map is left as it was) when ICP or the global alignment
   // fails (no placement, or an ambiguous one) or a scan finds another floor,
   // PreprocessError when the scan cannot be levelled.
-  const ScanRecord& add_scan(const IncomingScan& scan,
+  // The scan's points are let go once their directions are read: a caller that hands the
+  // scan over (std::move) holds them no longer than that.
+  const ScanRecord& add_scan(IncomingScan scan,
                              const std::optional<Point3>& robot_position = std::nullopt,
                              std::optional<double> predicted_overlap = std::nullopt);
 
@@ -328,6 +331,13 @@ class Survey {
                                                 const IncomingScan& in, const SurfaceFacing& facing,
                                                 const std::string& pose_failure,
                                                 double* scanner_shift_m) const;
+
+  // add_scan, calling `placed` with the scan's pose (survey frame) as soon as it is placed,
+  // before its points are read for their directions and the map is updated (Survey::run
+  // tells the platform then, which lets it free its copy of the points).
+  const ScanRecord& add_scan_telling(IncomingScan scan, const std::optional<Point3>& robot_position,
+                                     std::optional<double> predicted_overlap,
+                                     const std::function<void(const Eigen::Isometry3d&)>& placed);
 
   // The NBV's parameters for the map as it stands: the candidate grid's anchor, where
   // candidates may stand, the overlap rule.
