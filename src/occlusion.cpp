@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "parallel_for.h"
+#include "polynomial_atan2.h"
 #include "scanner_limits.h"
 #include "semioctree/octomap_ext/packed_key_map.h"
 
@@ -44,13 +45,28 @@ struct DirectionBins {
     // and hypot's care costs a third of a scan's pass over its returns.)
     const double horizontal2 = dx * dx + dy * dy, horizontal = std::sqrt(horizontal2);
     d.length = std::sqrt(horizontal2 + dz * dz);
-    d.elevation = std::atan2(dz, horizontal) * (180.0 / M_PI) + 90.0;
+    d.elevation = elevation_of(std::atan2(dz, horizontal));
     d.fraction = fraction(dx, dy);
     return std::isfinite(d.length) && d.length > 0;
   }
-  int bin(const Direction& d) const {
-    const int r = std::clamp(int(d.elevation * per_degree), 0, rows - 1);
-    return first[r] + column(r, d.fraction);
+  int bin(const Direction& d) const { return bin_at(row(d.elevation), d.fraction); }
+  // bin(d) and d.length of direction(dx, dy, dz, d), the angles from polynomial_atan2: its
+  // value ± its error bound maps to one row (one column) whenever std::atan2's would give
+  // the same one (the maps below only round and scale: they never decrease), so only
+  // where that margin straddles an edge is std::atan2 asked. False as direction().
+  bool bin_and_length(double dx, double dy, double dz, int& b, double& length) const {
+    constexpr double e = detail::kPolynomialAtan2Error;
+    const double horizontal2 = dx * dx + dy * dy, horizontal = std::sqrt(horizontal2);
+    length = std::sqrt(horizontal2 + dz * dz);
+    if (!(std::isfinite(length) && length > 0)) return false;
+    const double up = detail::polynomial_atan2(dz, horizontal);
+    int r = row(elevation_of(up - e));
+    if (r != row(elevation_of(up + e))) r = row(elevation_of(std::atan2(dz, horizontal)));
+    const double around = detail::polynomial_atan2(dy, dx);
+    int c = column(r, fraction_of(around - e));
+    if (c != column(r, fraction_of(around + e))) c = column(r, fraction(dx, dy));
+    b = first[r] + c;
+    return true;
   }
   // The bin of a direction given as a vector (not zero).
   int bin_of(double dx, double dy, double dz) const {
@@ -60,7 +76,13 @@ struct DirectionBins {
   }
   // The bin of row r holding azimuth fraction f ∈ [0, 1] (of the full turn from −180°).
   int column(int r, double f) const { return std::clamp(int(f * count[r]), 0, count[r] - 1); }
-  static double fraction(double dx, double dy) { return (std::atan2(dy, dx) + M_PI) / (2 * M_PI); }
+  int row(double elevation) const { return std::clamp(int(elevation * per_degree), 0, rows - 1); }
+  int bin_at(int r, double f) const { return first[r] + column(r, f); }
+  static double fraction(double dx, double dy) { return fraction_of(std::atan2(dy, dx)); }
+  // An azimuth (radians, −π..π) as the fraction of the turn from −π; an elevation
+  // (radians) as degrees above −90°.
+  static double fraction_of(double azimuth) { return (azimuth + M_PI) / (2 * M_PI); }
+  static double elevation_of(double up) { return up * (180.0 / M_PI) + 90.0; }
   // The centre elevation of row r (radians), and the centre azimuth fraction of its bin i.
   double row_elevation(int r) const { return ((r + 0.5) / per_degree - 90.0) * M_PI / 180.0; }
   double centre_fraction(int r, int i) const { return (i + 0.5) / count[r]; }
@@ -320,11 +342,13 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
   const unsigned workers = detail::thread_count(threads);
   const std::size_t chunk = 1 << 16, chunks = (scan.size() + chunk - 1) / chunk;
   // f(direction) for each return of chunk c, in the map frame.
-  auto each_return = [&](std::size_t c, auto&& f) {
-    DirectionBins::Direction d;
+  // f(bin, length) for each return of chunk c, in the map frame, binned by `bins`.
+  auto each_return = [&](std::size_t c, const DirectionBins& bins, auto&& f) {
+    int b = 0;
+    double length = 0;
     for (std::size_t i = c * chunk, end = std::min(scan.size(), i + chunk); i < end; ++i) {
       const Eigen::Vector3d v = scanner_to_map * Eigen::Vector3d(scan[i].x, scan[i].y, scan[i].z);
-      if (DirectionBins::direction(v.x(), v.y(), v.z(), d)) f(d);
+      if (bins.bin_and_length(v.x(), v.y(), v.z(), b, length)) f(std::size_t(b), length);
     }
   };
   // Pass 1: the 1° bins with returns, and how many returns they hold.
@@ -334,9 +358,9 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
   std::vector<std::size_t> returns(workers, 0);
   detail::parallel_for(chunks, workers, 1, [&](std::size_t c, unsigned w) {
     if (nearest[w].empty()) nearest[w].assign(std::size_t(degree.total), kNone);
-    each_return(c, [&](const DirectionBins::Direction& d) {
-      float& n = nearest[w][std::size_t(degree.bin(d))];
-      n = std::min(n, float(d.length));
+    each_return(c, degree, [&](std::size_t b, double length) {
+      float& n = nearest[w][b];
+      n = std::min(n, float(length));
       ++returns[w];
     });
   });
@@ -371,9 +395,8 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
       d.farthest.assign(std::size_t(bins.total), 0.0f);
       d.count.assign(std::size_t(bins.total), 0);
     }
-    each_return(c, [&](const DirectionBins::Direction& dir) {
-      const auto b = std::size_t(bins.bin(dir));
-      const auto range = float(dir.length);
+    each_return(c, bins, [&](std::size_t b, double length) {
+      const auto range = float(length);
       d.nearest[b] = std::min(d.nearest[b], range);
       d.farthest[b] = std::max(d.farthest[b], range);
       if (d.count[b] < 255) ++d.count[b];

@@ -6,6 +6,9 @@ foreach(t test_preprocess test_scan_io test_discretize test_occlusion test_updat
     target_include_directories(${t} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
   endif()
 endforeach()
+if(TARGET test_occlusion)  # src/polynomial_atan2.h, which the returns are binned with
+  target_include_directories(test_occlusion PRIVATE ${PROJECT_SOURCE_DIR})
+endif()
 if(TARGET test_discretize)
   find_package(PNG REQUIRED)  # reads the slices back, pixel by pixel
   target_link_libraries(test_discretize PRIVATE PNG::PNG)

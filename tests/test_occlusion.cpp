@@ -5,6 +5,7 @@
 #include <octomap/OcTree.h>
 
 #include <cmath>
+#include <iostream>
 #include <memory>
 #include <random>
 #include <set>
@@ -15,6 +16,7 @@
 #include "semioctree/occlusion.h"
 #include "semioctree/openings.h"
 #include "semioctree/preprocess.h"
+#include "src/polynomial_atan2.h"
 #include "support/synthetic_clouds.h"
 
 namespace semioctree {
@@ -480,6 +482,73 @@ TEST(Occlusion, ReturnDirectionsAreBinnedByDegreeAndTheirGapsClosed) {
 // in azimuths 90°..120° (a tall cabinet nearby), but none through a window at azimuths
 // 0°..30°, elevations 0°..10°. Opened above, the directions over the walls count as having
 // returns (open sky); the window and whatever lies under the cabinet's top stay hidden.
+// The polynomial arctangent the returns are binned with stays within its stated bound of
+// std::atan2, with the same quadrants and signed zeros.
+TEST(Occlusion, PolynomialAtan2StaysWithinItsBound) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), exponent(-6.0, 3.0);
+  double worst = 0;
+  for (int i = 0; i < 1000000; ++i) {
+    const double y = unit(rng) * std::pow(10.0, exponent(rng));
+    const double x = unit(rng) * std::pow(10.0, exponent(rng));
+    worst = std::max(worst, std::abs(detail::polynomial_atan2(y, x) - std::atan2(y, x)));
+  }
+  // Near tan(π/8), where the series switches, and along the axes and diagonals.
+  for (double t : {0.41421356237309503, 0.4142135623730951, 1.0, 0.0, 1e-300}) {
+    for (double sy : {-1.0, 1.0})
+      for (double sx : {-1.0, 1.0}) {
+        worst = std::max(worst,
+                         std::abs(detail::polynomial_atan2(sy * t, sx) - std::atan2(sy * t, sx)));
+        worst = std::max(worst,
+                         std::abs(detail::polynomial_atan2(sy, sx * t) - std::atan2(sy, sx * t)));
+      }
+  }
+  std::cout << "polynomial atan2: largest difference from std::atan2 " << worst << " rad\n";
+  EXPECT_LT(worst, detail::kPolynomialAtan2Error / 10);
+  for (double y : {0.0, -0.0})
+    for (double x : {1.0, -1.0, 0.0, -0.0}) {
+      const double p = detail::polynomial_atan2(y, x), e = std::atan2(y, x);
+      EXPECT_EQ(p, e) << y << ", " << x;
+      EXPECT_EQ(std::signbit(p), std::signbit(e)) << y << ", " << x;
+    }
+}
+
+// Each return lands in the bin its own direction is looked up in (has uses std::atan2,
+// add_scan the polynomial one and std::atan2 only near a bin's edge): one return a scan,
+// at the edges of the degree bins and at random.
+TEST(Occlusion, ReturnDirectionsBinEachReturnWhereItsDirectionIsLookedUp) {
+  std::vector<Eigen::Vector3d> directions;
+  for (int elevation = -89; elevation <= 89; elevation += 7)
+    for (double azimuth : {-180.0, -179.0, -90.0, -45.0, 0.0, 1.0, 37.0, 90.0, 135.0, 179.0}) {
+      const double el = elevation * M_PI / 180, az = azimuth * M_PI / 180;
+      directions.emplace_back(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
+                              std::sin(el));
+    }
+  // Row edges at every degree of elevation, at azimuths of whole bins of rows of n bins.
+  for (int elevation = -90; elevation <= 90; ++elevation)
+    for (int n : {1, 7, 360}) {
+      const double el = elevation * M_PI / 180, az = -M_PI + 2 * M_PI * double(elevation + 90) / n;
+      directions.emplace_back(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
+                              std::sin(el));
+    }
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> gauss;
+  for (int i = 0; i < 1000; ++i) directions.emplace_back(gauss(rng), gauss(rng), gauss(rng));
+  std::size_t missed = 0;
+  for (const Eigen::Vector3d& d : directions) {
+    for (double range : {0.7, 3.3, 41.0}) {
+      const Eigen::Vector3d p = range * d.normalized();
+      Cloud one;
+      one.push_back(pcl::PointXYZ(float(p.x()), float(p.y()), float(p.z())));
+      ReturnDirections r;
+      r.add_scan(one, Eigen::Matrix3d::Identity(), 1);
+      const pcl::PointXYZ& q = one[0];
+      missed += !r.has(q.x, q.y, q.z) || r.bins_with_returns() != 1;
+    }
+  }
+  EXPECT_EQ(missed, 0u) << "of " << 3 * directions.size() << " returns";
+}
+
 TEST(Occlusion, ReturnDirectionsOpenAboveTheHighestReturnOfEachAzimuth) {
   const auto deg = [](double a_deg, double e_deg) {
     const double a = a_deg * M_PI / 180, e = e_deg * M_PI / 180;
