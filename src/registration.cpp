@@ -19,6 +19,7 @@
 #include <sstream>
 #include <vector>
 
+#include "parallel_for.h"
 #include "random_subset.h"
 #include "semioctree/timing.h"
 
@@ -163,32 +164,46 @@ CloudN::Ptr shifted(const Cloud& in, const Eigen::Vector3d& offset) {
 // the smallest eigenvector of the covariance of the (up to) 12 nearest
 // neighbours within `radius`. Points with fewer than 3 such neighbours (isolated
 // returns) keep a zero normal: they then add nothing to the point-to-plane error.
-// Returns the number of points given a normal.
-std::size_t estimate_normals(CloudN& cloud, const pcl::search::KdTree<PointN>& tree,
-                             double radius) {
+// Returns the number of points given a normal. Each point's normal is its own: the same
+// on any number of `threads` (0: one per core).
+std::size_t estimate_normals(CloudN& cloud, const pcl::search::KdTree<PointN>& tree, double radius,
+                             unsigned threads) {
   constexpr int k = 12;
-  pcl::Indices nn;
-  std::vector<float> d2;
+  constexpr std::size_t kChunk = 1024;
+  const unsigned workers = detail::thread_count(threads);
+  struct Scratch {
+    pcl::Indices nn;
+    std::vector<float> d2;
+    std::size_t with_normal = 0;
+  };
+  std::vector<Scratch> scratch(workers);
+  detail::parallel_for(
+      (cloud.size() + kChunk - 1) / kChunk, workers, 1, [&](std::size_t c, unsigned w) {
+        Scratch& s = scratch[w];
+        for (std::size_t i = c * kChunk, end = std::min(cloud.size(), i + kChunk); i < end; ++i) {
+          PointN& q = cloud[i];
+          // The k nearest, less those beyond the radius: the same neighbours as a radius
+          // search keeping k, and cheaper where the radius holds many more than k.
+          int found = tree.nearestKSearch(q, k, s.nn, s.d2);
+          while (found > 0 && s.d2[std::size_t(found - 1)] > radius * radius) --found;
+          s.nn.resize(std::size_t(found));
+          if (found < 3) continue;
+          Eigen::Matrix3f cov;
+          Eigen::Vector4f centroid;
+          if (pcl::computeMeanAndCovarianceMatrix(*tree.getInputCloud(), s.nn, cov, centroid) < 3)
+            continue;
+          float eigenvalue;
+          Eigen::Vector3f n;
+          pcl::eigen33(cov, eigenvalue, n);
+          if (!n.allFinite() || n.squaredNorm() < 0.5f) continue;
+          q.normal_x = n.x();
+          q.normal_y = n.y();
+          q.normal_z = n.z();
+          ++s.with_normal;
+        }
+      });
   std::size_t with_normal = 0;
-  for (auto& q : cloud) {
-    // The k nearest, less those beyond the radius: the same neighbours as a radius search
-    // keeping k, and cheaper where the radius holds many more than k.
-    int found = tree.nearestKSearch(q, k, nn, d2);
-    while (found > 0 && d2[std::size_t(found - 1)] > radius * radius) --found;
-    nn.resize(std::size_t(found));
-    if (found < 3) continue;
-    Eigen::Matrix3f cov;
-    Eigen::Vector4f centroid;
-    if (pcl::computeMeanAndCovarianceMatrix(*tree.getInputCloud(), nn, cov, centroid) < 3) continue;
-    float eigenvalue;
-    Eigen::Vector3f n;
-    pcl::eigen33(cov, eigenvalue, n);
-    if (!n.allFinite() || n.squaredNorm() < 0.5f) continue;
-    q.normal_x = n.x();
-    q.normal_y = n.y();
-    q.normal_z = n.z();
-    ++with_normal;
-  }
+  for (const Scratch& s : scratch) with_normal += s.with_normal;
   return with_normal;
 }
 
@@ -214,11 +229,11 @@ std::vector<std::uint8_t> orient_target(CloudN& cloud, const Eigen::Vector3d& of
 // Normals of `cloud` (estimate_normals within `radius`) turned towards `viewpoint`.
 // `neighbours`: the cloud whose points the normals are fitted to (null: `cloud` itself).
 void normals_facing(CloudN& cloud, double radius, const Eigen::Vector3f& viewpoint,
-                    const CloudN::ConstPtr& neighbours = nullptr) {
+                    unsigned threads, const CloudN::ConstPtr& neighbours = nullptr) {
   if (cloud.empty()) return;
   pcl::search::KdTree<PointN> tree;
   tree.setInputCloud(neighbours ? neighbours : pcl::make_shared<CloudN>(cloud));
-  estimate_normals(cloud, tree, radius);
+  estimate_normals(cloud, tree, radius, threads);
   for (PointN& q : cloud) {
     const Eigen::Vector3f n = q.getNormalVector3fMap();
     if (n.dot(viewpoint - q.getVector3fMap()) < 0.0f) q.getNormalVector3fMap() = -n;
@@ -292,7 +307,7 @@ RegistrationResult register_scan(const Cloud& source, const Cloud& target,
   // One kd-tree over the target serves the normals, ICP and the final check.
   const BoundedKdTree::Ptr tree(new BoundedKdTree);
   tree->setInputCloud(tgt);
-  const std::size_t with_normal = estimate_normals(*tgt, *tree, 4.0 * p.voxel);
+  const std::size_t with_normal = estimate_normals(*tgt, *tree, 4.0 * p.voxel, p.threads);
   if (with_normal < p.min_points) {
     std::ostringstream m;
     m << "cannot register: only " << with_normal << " of " << tgt->size()
@@ -305,7 +320,7 @@ RegistrationResult register_scan(const Cloud& source, const Cloud& target,
   if (facing) viewpoint = (facing->source_viewpoint - offset).cast<float>();
   if (facing && facing->target_side) tree->set_oriented(orient_target(*tgt, offset, *facing));
   auto source_at = [&](const CloudN::Ptr& cloud, double voxel) {
-    if (facing && facing->target_side) normals_facing(*cloud, 4.0 * voxel, viewpoint);
+    if (facing && facing->target_side) normals_facing(*cloud, 4.0 * voxel, viewpoint, p.threads);
     return cloud;
   };
   // The source of a stage, with its normals: src_ds downsampled to `voxel` (src itself at
@@ -390,7 +405,8 @@ RegistrationResult register_scan(const Cloud& source, const Cloud& target,
   CloudN::Ptr checked = src;
   if (src->size() > p.icp_source_points) {
     checked = detail::random_subset(*src, p.icp_source_points, 4321);
-    if (facing && facing->target_side) normals_facing(*checked, 4.0 * p.voxel, viewpoint, src);
+    if (facing && facing->target_side)
+      normals_facing(*checked, 4.0 * p.voxel, viewpoint, p.threads, src);
   } else {
     checked = icp_source(p.voxel);  // src, with its normals
   }

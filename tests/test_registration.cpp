@@ -267,6 +267,30 @@ TEST(Registration, TheTwoFacesOfAWallAreNotConfused) {
   EXPECT_GT(faced.overlap, 0.4);
 }
 
+// The surface normals are estimated on the threads asked for, each point's its own: the
+// same placement, to the bit, on 1, 2 or 5 threads (with the facing, whose source normals
+// are estimated too).
+TEST(Registration, SamePlacementOnAnyNumberOfThreads) {
+  const Cloud::Ptr target = partitioned(false, 0.03, 1);
+  const Cloud::Ptr truth = partitioned(true, 0.037, 2);
+  const Eigen::Isometry3d error = planar_pose(0.05, 0.06, 2.0);
+  const Cloud::Ptr source = transformed(*truth, error);
+  SurfaceFacing facing;
+  facing.source_viewpoint = error * Eigen::Vector3d(2.0, 2.0, 1.5);
+  facing.target_side = side_seen;
+  RegistrationParams p;
+  p.threads = 1;
+  const RegistrationResult one = register_scan(*source, *target, p, &facing);
+  for (unsigned threads : {2u, 5u}) {
+    p.threads = threads;
+    const RegistrationResult many = register_scan(*source, *target, p, &facing);
+    EXPECT_TRUE(many.correction.matrix() == one.correction.matrix()) << threads << " threads";
+    EXPECT_EQ(many.fitness, one.fitness);
+    EXPECT_EQ(many.overlap, one.overlap);
+    EXPECT_EQ(many.iterations, one.iterations);
+  }
+}
+
 TEST(Registration, EmptyOrTinyCloudsFail) {
   const Cloud::Ptr target = room(0.05, 11);
   const Cloud empty;
