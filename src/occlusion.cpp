@@ -49,7 +49,10 @@ struct DirectionBins {
     d.fraction = fraction(dx, dy);
     return std::isfinite(d.length) && d.length > 0;
   }
-  int bin(const Direction& d) const { return bin_at(row(d.elevation), d.fraction); }
+  int bin(const Direction& d) const {
+    const int r = row(d.elevation);
+    return first[r] + column(r, d.fraction);
+  }
   // bin(d) and d.length of direction(dx, dy, dz, d), the angles from polynomial_atan2: its
   // value ± its error bound maps to one row (one column) whenever std::atan2's would give
   // the same one (the maps below only round and scale: they never decrease), so only
@@ -77,7 +80,6 @@ struct DirectionBins {
   // The bin of row r holding azimuth fraction f ∈ [0, 1] (of the full turn from −180°).
   int column(int r, double f) const { return std::clamp(int(f * count[r]), 0, count[r] - 1); }
   int row(double elevation) const { return std::clamp(int(elevation * per_degree), 0, rows - 1); }
-  int bin_at(int r, double f) const { return first[r] + column(r, f); }
   static double fraction(double dx, double dy) { return fraction_of(std::atan2(dy, dx)); }
   // An azimuth (radians, −π..π) as the fraction of the turn from −π; an elevation
   // (radians) as degrees above −90°.
@@ -341,7 +343,6 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
   depth_cm_.clear();
   const unsigned workers = detail::thread_count(threads);
   const std::size_t chunk = 1 << 16, chunks = (scan.size() + chunk - 1) / chunk;
-  // f(direction) for each return of chunk c, in the map frame.
   // f(bin, length) for each return of chunk c, in the map frame, binned by `bins`.
   auto each_return = [&](std::size_t c, const DirectionBins& bins, auto&& f) {
     int b = 0;

@@ -250,8 +250,9 @@ std::optional<double> top_of_heights(std::vector<float> z, double q) {
 // the misses of a batch then overlap. The keys go in in the order given.
 class BatchedInsert {
  public:
+  static constexpr std::uint64_t kNone = PackedKeyMap<std::uint8_t>::kNoKey;  // no cell
   explicit BatchedInsert(PackedKeyMap<std::uint8_t>& cells) : cells_(cells) {}
-  // Queues `key` (PackedKeyMap's kNoKey: a point that counts as read but has no cell);
+  // Queues `key` (kNone: a point that counts as read but has no cell);
   // `inserted(key)` is called as each one goes in, in order, and returns false to stop.
   template <class Inserted>
   bool add(std::uint64_t key, const Inserted& inserted) {
@@ -273,7 +274,6 @@ class BatchedInsert {
 
  private:
   static constexpr std::size_t kBatch = 16;
-  static constexpr std::uint64_t kNone = PackedKeyMap<std::uint8_t>::kNoKey;
   PackedKeyMap<std::uint8_t>& cells_;
   std::uint64_t keys_[kBatch];
   std::size_t n_ = 0;
@@ -289,7 +289,6 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
   // (a scan's points sweep its surfaces in order).
   cap = std::max<std::size_t>(cap, 1);
   const double inv = 1.0 / spacing;
-  constexpr std::uint64_t kNone = PackedKeyMap<std::uint8_t>::kNoKey;
   std::size_t read = 0;
   {
     PackedKeyMap<std::uint8_t> cells(std::min(size, cap + 1));
@@ -300,7 +299,7 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
     };
     bool more = true;
     each_point([&](const pcl::PointXYZ& q) {
-      return more = batch.add(finite(q) ? cell_key(q, inv) : kNone, counted);
+      return more = batch.add(finite(q) ? cell_key(q, inv) : BatchedInsert::kNone, counted);
     });
     if (more) batch.flush(counted);
     if (cells.size() <= cap) return cells.size();

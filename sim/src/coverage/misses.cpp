@@ -25,7 +25,7 @@ std::vector<std::size_t> missed_of(const std::vector<bool>& covered) {
 // One flag per missed sample: sample_visible_from one of the optical centres (the walls
 // prepared once).
 std::vector<std::uint8_t> in_view_flags(const GroundTruth& truth,
-                                        const std::vector<SurfaceSample>& missed,
+                                        const std::vector<SurfaceSample>& missed_samples,
                                         const std::vector<Eigen::Vector3d>& optical_centres,
                                         unsigned threads) {
   const detail::ScannerLimits lim = detail::scanner_limits(truth.scene().scanner);
@@ -35,12 +35,12 @@ std::vector<std::uint8_t> in_view_flags(const GroundTruth& truth,
     centre_offsets.emplace_back(walls.size());
     detail::wall_offsets(walls, c, centre_offsets.back().data());
   }
-  std::vector<std::uint8_t> in_view(missed.size(), 0);
+  std::vector<std::uint8_t> in_view(missed_samples.size(), 0);
   std::atomic<std::size_t> next{0};
   auto work = [&](bool) {
     std::vector<double> target_offsets(walls.size());
-    for (std::size_t m; (m = next.fetch_add(1)) < missed.size();) {
-      const SurfaceSample& s = missed[m];
+    for (std::size_t m; (m = next.fetch_add(1)) < missed_samples.size();) {
+      const SurfaceSample& s = missed_samples[m];
       const Eigen::Vector3d target = detail::segment_target(s);
       detail::wall_offsets(walls, target, target_offsets.data());
       for (std::size_t k = 0; k < optical_centres.size() && !in_view[m]; ++k) {
@@ -53,8 +53,8 @@ std::vector<std::uint8_t> in_view_flags(const GroundTruth& truth,
     }
   };
   detail::run_on_threads(
-      std::min<unsigned>(detail::thread_count(threads),
-                         static_cast<unsigned>(std::max<std::size_t>(1, missed.size() / 256))),
+      std::min<unsigned>(detail::thread_count(threads), static_cast<unsigned>(std::max<std::size_t>(
+                                                            1, missed_samples.size() / 256))),
       work);
   return in_view;
 }
