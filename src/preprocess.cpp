@@ -192,8 +192,10 @@ Eigen::Vector3d refine_normal(const Cloud& cloud, const HorizontalPlane& plane, 
 }
 
 // Mean and σ of the z values near `guess`, re-centred a few times (a Gaussian
-// fitted to one peak of the z histogram by its moments).
-HeightPeak fit_peak(const std::vector<float>& all_z, double guess, const PreprocessParams& p) {
+// fitted to one peak of the z histogram by its moments). each_height(f) calls f(z) for
+// every height, in order (a scan's levelled heights are streamed, not stored).
+template <class EachHeight>
+HeightPeak fit_peak(const EachHeight& each_height, double guess, const PreprocessParams& p) {
   // Histogram mode within the search window first: the peak itself.
   const int nb = std::max(1, int(std::ceil(2 * p.peak_window / p.histogram_bin)));
   std::vector<std::size_t> hist(std::size_t(nb), 0);
@@ -203,12 +205,12 @@ HeightPeak fit_peak(const std::vector<float>& all_z, double guess, const Preproc
   // (always, on a peak), the same values in the same order, so the same sums.
   const double near = 3 * p.peak_window;
   std::vector<float> z;
-  for (float v : all_z) {
-    if (!(std::fabs(double(v) - guess) <= near)) continue;
+  each_height([&](float v) {
+    if (!(std::fabs(double(v) - guess) <= near)) return;
     z.push_back(v);
     const int b = int(std::floor((v - lo) / p.histogram_bin));
     if (b >= 0 && b < nb) ++hist[std::size_t(b)];
-  }
+  });
   const auto mode = std::max_element(hist.begin(), hist.end()) - hist.begin();
   HeightPeak peak;
   peak.center = lo + (double(mode) + 0.5) * p.histogram_bin;
@@ -217,14 +219,18 @@ HeightPeak fit_peak(const std::vector<float>& all_z, double guess, const Preproc
     double sum = 0, sum2 = 0;
     std::size_t n = 0;
     const bool within_near = std::fabs(peak.center - guess) + window < near - p.histogram_bin;
-    for (float v : within_near ? z : all_z) {
+    auto add = [&](float v) {
       const double dz = v - peak.center;
       if (std::fabs(dz) <= window) {
         sum += dz;
         sum2 += dz * dz;
         ++n;
       }
-    }
+    };
+    if (within_near)
+      for (float v : z) add(v);
+    else
+      each_height(add);
     if (n < 10) break;
     const double mean = sum / double(n);
     peak.center += mean;
@@ -371,6 +377,7 @@ void CellThinning::add(const Cloud& points) {
 
 Cloud::Ptr CellThinning::release() {
   Cloud::Ptr out = std::move(kept_);
+  out->points.shrink_to_fit();  // grown by doubling: up to twice what it holds
   kept_.reset(new Cloud);
   kept_->is_dense = true;
   slot_.clear();
@@ -476,18 +483,21 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   // Rotate, then find the peaks of the z histogram near the planes' heights.
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = level.toRotationMatrix();
-  // The levelled heights first, then only the points kept are levelled into the cut
-  // cloud: a scan runs to millions of points, a fit of them all is not copied.
+  // The levelled heights are streamed, each point levelled again as it is read, and only
+  // the points kept are levelled into the cut cloud: a scan runs to millions of points,
+  // and neither its heights nor its levelled copy are stored (docs/data-flow.md, "Memory").
   const Eigen::Affine3f rotate(T.matrix().cast<float>());
-  std::vector<float> z(input.size());
-  for (std::size_t i = 0; i < input.size(); ++i) z[i] = pcl::transformPoint(input[i], rotate).z;
+  auto levelled = [&](std::size_t i) { return pcl::transformPoint(input[i], rotate); };
+  auto each_height = [&](auto&& f) {
+    for (std::size_t i = 0; i < input.size(); ++i) f(levelled(i).z);
+  };
   {
     const Eigen::Vector3d on_floor = T * Eigen::Vector3d(c.x(), c.y(), lowest->height_at(c));
-    r.floor = fit_peak(z, on_floor.z(), p);
+    r.floor = fit_peak(each_height, on_floor.z(), p);
     r.floor.plane_inliers = lowest->inliers;
     if (r.ceiling_found) {
       const Eigen::Vector3d on_ceiling = T * Eigen::Vector3d(c.x(), c.y(), highest->height_at(c));
-      r.ceiling = fit_peak(z, on_ceiling.z(), p);
+      r.ceiling = fit_peak(each_height, on_ceiling.z(), p);
       r.ceiling.plane_inliers = highest->inliers;
     }
   }
@@ -502,7 +512,7 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   const double dz = T.translation().z();
   std::vector<bool> in_band(input.size());  // on the floor or the ceiling: cut
   for (std::size_t i = 0; i < input.size(); ++i) {
-    const float v = float(double(z[i]) + dz);
+    const float v = float(double(levelled(i).z) + dz);
     if (std::fabs(v - r.floor.center) <= zf) {
       ++r.floor.removed;
       in_band[i] = true;
@@ -511,7 +521,6 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
       in_band[i] = true;
     }
   }
-  z = {};  // (levelled again below, to the same floats)
   // The cut cloud (the points kept, levelled) is streamed, not stored: decimation reads it
   // a few times, levelling each point again, and keeps only what it decimates to (a scan
   // of 5.4 M points would hold another 4.5 M beside it: docs/data-flow.md, "Memory").
@@ -519,7 +528,7 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   auto each_cut = [&](auto&& f) {
     for (std::size_t i = 0; i < input.size(); ++i) {
       if (in_band[i]) continue;
-      pcl::PointXYZ v = pcl::transformPoint(input[i], rotate);
+      pcl::PointXYZ v = levelled(i);
       v.z = float(double(v.z) + dz);
       if (!f(v)) return;
     }

@@ -106,8 +106,7 @@ Cloud::Ptr voxel_downsample(const Cloud& in, double leaf) {
   pcl::VoxelGrid<pcl::PointXYZ> grid;
   grid.setLeafSize(float(leaf), float(leaf), float(leaf));
   if (slabs <= 1) {
-    Cloud::Ptr copy(new Cloud(in));
-    grid.setInputCloud(copy);
+    grid.setInputCloud(Cloud::ConstPtr(&in, [](const Cloud*) {}));  // lent, not copied
     grid.filter(*out);
     return out;
   }
@@ -130,17 +129,23 @@ Cloud::Ptr voxel_downsample(const Cloud& in, double leaf) {
   return out;
 }
 
-// The points of `cloud` inside the bounding box of `around` grown by `margin` on every side.
-Cloud::Ptr near_box(const Cloud& cloud, const Cloud& around, double margin) {
+// The points of `cloud` inside the bounding box of `around` grown by `margin` on every
+// side: `cloud` itself (lent, not copied) when all of it is inside.
+Cloud::ConstPtr near_box(const Cloud& cloud, const Cloud& around, double margin) {
   Eigen::Vector4f lo, hi;
   pcl::getMinMax3D(around, lo, hi);
   const Eigen::Array3f grow = Eigen::Array3f::Constant(float(margin));
   const Eigen::Array3f low = lo.head<3>().array() - grow, high = hi.head<3>().array() + grow;
-  Cloud::Ptr out(new Cloud);
-  for (const auto& q : cloud) {
+  auto inside = [&](const pcl::PointXYZ& q) {
     const Eigen::Array3f v = q.getArray3fMap();
-    if ((v >= low).all() && (v <= high).all()) out->push_back(q);
-  }
+    return (v >= low).all() && (v <= high).all();
+  };
+  const auto n = std::size_t(std::count_if(cloud.begin(), cloud.end(), inside));
+  if (n == cloud.size()) return Cloud::ConstPtr(&cloud, [](const Cloud*) {});
+  Cloud::Ptr out(new Cloud);
+  out->reserve(n);
+  for (const auto& q : cloud)
+    if (inside(q)) out->push_back(q);
   return out;
 }
 

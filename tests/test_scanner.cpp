@@ -257,33 +257,38 @@ TEST(Scanner, SameSeedSameScanWhateverTheThreadCount) {
                            one.points.size() * sizeof(one.points[0])));
 }
 
-// The rows a scan is gathered from hold its points, row by row in grid order.
-TEST(Scanner, RowsGatherIntoTheScan) {
+// The rows handed over one by one are the scan's, in grid order, each once, whatever the
+// number of threads (and so of rows cast per batch).
+TEST(Scanner, RowsAreHandedOverInGridOrder) {
   const Loaded lab("lab");
   ScannerConfig c = lab.scene.scanner;
   c.azimuth_step_deg = c.elevation_step_deg = 0.5;
   ScanOptions o;
   o.seed = 11;
-  o.threads = 2;
+  o.threads = 1;
   const Pose2 pose{5.2, 3.6, 30.0};
   const Scan whole = scan(*lab.caster, c, pose, o);
+  ASSERT_GT(whole.grid.rows, 3u * 32u);  // several batches on 3 threads
+  o.threads = 3;
   Scan header;
   header.points.push_back(Eigen::Vector3f::Ones());  // replaced, not appended to
-  const std::vector<ScanRow> rows = scan_rows(*lab.caster, c, pose, o, header);
+  std::vector<std::uint32_t> order;
+  std::size_t i = 0, differ = 0;
+  for_each_scan_row(*lab.caster, c, pose, o, header, [&](std::uint32_t r, ScanRow&& row) {
+    order.push_back(r);
+    ASSERT_EQ(row.points.size(), row.col.size());
+    for (std::size_t k = 0; k < row.points.size(); ++k, ++i) {
+      ASSERT_LT(i, whole.points.size());
+      differ += row.points[k] != whole.points[i] || whole.row[i] != r ||
+                whole.col[i] != row.col[k] || whole.intensity[i] != row.intensity[k];
+    }
+  });
   EXPECT_TRUE(header.points.empty());
   EXPECT_EQ(header.rays_cast, whole.rays_cast);
   EXPECT_EQ(header.grid.rows, whole.grid.rows);
   EXPECT_TRUE(header.sensor_to_world().isApprox(whole.sensor_to_world()));
-  ASSERT_EQ(rows.size(), whole.grid.rows);
-  std::size_t i = 0, differ = 0;
-  for (std::uint32_t r = 0; r < rows.size(); ++r) {
-    ASSERT_EQ(rows[r].points.size(), rows[r].col.size());
-    for (std::size_t k = 0; k < rows[r].points.size(); ++k, ++i) {
-      ASSERT_LT(i, whole.points.size());
-      differ += rows[r].points[k] != whole.points[i] || whole.row[i] != r ||
-                whole.col[i] != rows[r].col[k] || whole.intensity[i] != rows[r].intensity[k];
-    }
-  }
+  ASSERT_EQ(order.size(), whole.grid.rows);
+  for (std::uint32_t r = 0; r < order.size(); ++r) ASSERT_EQ(order[r], r);
   EXPECT_EQ(i, whole.points.size());
   EXPECT_EQ(differ, 0u);
 }

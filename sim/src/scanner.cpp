@@ -63,14 +63,15 @@ std::uint64_t mix(std::uint64_t x) {
 
 }  // namespace
 
-std::vector<ScanRow> scan_rows(const RayCaster& caster, const ScannerConfig& config,
-                               const Pose2& pose, const ScanOptions& options, Scan& out) {
-  out = Scan();
-  out.pose = pose;
-  out.sensor_height = config.height;
-  out.grid = scan_grid(config);
-  const ScanGrid& g = out.grid;
-  out.rays_cast = static_cast<std::uint64_t>(g.rows) * g.cols;
+void for_each_scan_row(const RayCaster& caster, const ScannerConfig& config, const Pose2& pose,
+                       const ScanOptions& options, Scan& header,
+                       const std::function<void(std::uint32_t, ScanRow&&)>& take_row) {
+  header = Scan();
+  header.pose = pose;
+  header.sensor_height = config.height;
+  header.grid = scan_grid(config);
+  const ScanGrid g = header.grid;
+  header.rays_cast = static_cast<std::uint64_t>(g.rows) * g.cols;
 
   const double yaw = pose.yaw_deg * M_PI / 180.0;
   std::vector<double> cos_az(g.cols), sin_az(g.cols), cos_world(g.cols), sin_world(g.cols);
@@ -88,100 +89,101 @@ std::vector<ScanRow> scan_rows(const RayCaster& caster, const ScannerConfig& con
   // inside it with noise; the measured range decides what is kept.
   const float t_far = static_cast<float>(config.max_range + 6 * sigma);
 
-  std::vector<ScanRow> rows(g.rows);
-  std::atomic<std::uint32_t> next_row{0};
-  std::atomic<std::uint32_t> rows_done{0};
-  auto work = [&](bool report) {
-    std::vector<Ray> rays(g.cols);
-    std::vector<RayHit> hits(g.cols);
-    std::vector<float> noise(g.cols + 1, 0.0f);
-    for (std::uint32_t r = next_row++; r < g.rows; r = next_row++) {
-      const double el = g.elevation_deg(r) * M_PI / 180.0;
-      const double ce = std::cos(el), se = std::sin(el);
-      for (std::uint32_t c = 0; c < g.cols; ++c) {
-        Ray& ray = rays[c];
-        ray.origin = origin;
-        ray.direction =
-            Eigen::Vector3f(static_cast<float>(ce * cos_world[c]),
-                            static_cast<float>(ce * sin_world[c]), static_cast<float>(se));
-        ray.t_near = 0.0f;
-        ray.t_far = t_far;
-      }
-      caster.intersect(rays.data(), hits.data(), g.cols);
+  // Rows are cast in parallel a batch at a time and handed over in order between
+  // batches: only one batch is held here, whatever the scan's size.
+  const unsigned threads = std::min<unsigned>(detail::thread_count(options.threads), g.rows);
+  const std::uint32_t batch_rows = 32 * threads;
+  std::vector<ScanRow> batch(batch_rows);
+  for (std::uint32_t first = 0; first < g.rows; first += batch_rows) {
+    const std::uint32_t end = std::min(g.rows, first + batch_rows);
+    std::atomic<std::uint32_t> next_row{first};
+    detail::run_on_threads(threads, [&](bool) {
+      std::vector<Ray> rays(g.cols);
+      std::vector<RayHit> hits(g.cols);
+      std::vector<float> noise(g.cols + 1, 0.0f);
+      for (std::uint32_t r = next_row++; r < end; r = next_row++) {
+        const double el = g.elevation_deg(r) * M_PI / 180.0;
+        const double ce = std::cos(el), se = std::sin(el);
+        for (std::uint32_t c = 0; c < g.cols; ++c) {
+          Ray& ray = rays[c];
+          ray.origin = origin;
+          ray.direction =
+              Eigen::Vector3f(static_cast<float>(ce * cos_world[c]),
+                              static_cast<float>(ce * sin_world[c]), static_cast<float>(se));
+          ray.t_near = 0.0f;
+          ray.t_far = t_far;
+        }
+        caster.intersect(rays.data(), hits.data(), g.cols);
 
-      // One noise value per grid cell, hit or not, drawn in column order from this row's
-      // own stream: the values do not depend on which thread runs the row.
-      std::mt19937_64 rng(mix(options.seed ^ mix(r + 1)));
-      if (sigma > 0) {
-        for (std::uint32_t c = 0; c < g.cols; c += 2) {
-          // Box–Muller written out: std::normal_distribution differs between libraries.
-          // Single precision is ample for millimetre noise and twice as fast.
-          const float u1 = (static_cast<float>(rng() >> 40) + 1.0f) * 0x1.0p-24f;  // (0, 1]
-          const float u2 = static_cast<float>(rng() >> 40) * 0x1.0p-24f;
-          const float radius = static_cast<float>(sigma) * std::sqrt(-2.0f * std::log(u1));
-          const float angle = 6.2831853f * u2;
-          noise[c] = radius * std::cos(angle);
-          noise[c + 1] = radius * std::sin(angle);
+        // One noise value per grid cell, hit or not, drawn in column order from this row's
+        // own stream: the values do not depend on which thread runs the row.
+        std::mt19937_64 rng(mix(options.seed ^ mix(r + 1)));
+        if (sigma > 0) {
+          for (std::uint32_t c = 0; c < g.cols; c += 2) {
+            // Box–Muller written out: std::normal_distribution differs between libraries.
+            // Single precision is ample for millimetre noise and twice as fast.
+            const float u1 = (static_cast<float>(rng() >> 40) + 1.0f) * 0x1.0p-24f;  // (0, 1]
+            const float u2 = static_cast<float>(rng() >> 40) * 0x1.0p-24f;
+            const float radius = static_cast<float>(sigma) * std::sqrt(-2.0f * std::log(u1));
+            const float angle = 6.2831853f * u2;
+            noise[c] = radius * std::cos(angle);
+            noise[c + 1] = radius * std::sin(angle);
+          }
+        }
+        ScanRow& row = batch[r - first];
+        row.points.reserve(g.cols);
+        if (options.with_grid_indices) row.col.reserve(g.cols);
+        if (options.with_intensity) row.intensity.reserve(g.cols);
+        for (std::uint32_t c = 0; c < g.cols; ++c) {
+          if (!hits[c].hit) continue;
+          const double range =
+              static_cast<double>(hits[c].distance) + static_cast<double>(noise[c]);
+          if (range < config.min_range || range > config.max_range) continue;
+          row.points.emplace_back(static_cast<float>(ce * cos_az[c] * range),
+                                  static_cast<float>(ce * sin_az[c] * range),
+                                  static_cast<float>(se * range));
+          if (options.with_intensity)
+            row.intensity.push_back(std::abs(rays[c].direction.dot(hits[c].normal)));
+          if (options.with_grid_indices) row.col.push_back(c);
         }
       }
-      ScanRow& row = rows[r];
-      row.points.reserve(g.cols);
-      if (options.with_grid_indices) row.col.reserve(g.cols);
-      if (options.with_intensity) row.intensity.reserve(g.cols);
-      for (std::uint32_t c = 0; c < g.cols; ++c) {
-        if (!hits[c].hit) continue;
-        const double range = static_cast<double>(hits[c].distance) + static_cast<double>(noise[c]);
-        if (range < config.min_range || range > config.max_range) continue;
-        row.points.emplace_back(static_cast<float>(ce * cos_az[c] * range),
-                                static_cast<float>(ce * sin_az[c] * range),
-                                static_cast<float>(se * range));
-        if (options.with_intensity)
-          row.intensity.push_back(std::abs(rays[c].direction.dot(hits[c].normal)));
-        if (options.with_grid_indices) row.col.push_back(c);
-      }
-      const std::uint32_t done = ++rows_done;
-      if (report && options.progress && done % 64 == 0) options.progress(done, g.rows);
+    });
+    for (std::uint32_t r = first; r < end; ++r) {
+      take_row(r, std::move(batch[r - first]));
+      batch[r - first] = ScanRow();
     }
-  };
-  const unsigned threads = std::min<unsigned>(detail::thread_count(options.threads), g.rows);
-  detail::run_on_threads(threads, work);
-  if (options.progress) options.progress(g.rows, g.rows);
-  return rows;
+    if (options.progress) options.progress(end, g.rows);
+  }
 }
 
 Scan scan(const RayCaster& caster, const ScannerConfig& config, const Pose2& pose,
           const ScanOptions& options) {
-  Scan out;
-  std::vector<ScanRow> rows = scan_rows(caster, config, pose, options, out);
-  const ScanGrid& g = out.grid;
-  const unsigned threads = std::min<unsigned>(detail::thread_count(options.threads), g.rows);
-
-  // Gather the rows in grid order, in parallel as well (a fine scan is ~100 MB).
-  std::vector<std::size_t> offset(g.rows + 1, 0);
-  for (std::uint32_t r = 0; r < g.rows; ++r) offset[r + 1] = offset[r] + rows[r].points.size();
-  const std::size_t total = offset[g.rows];
-  out.points.resize(total);
+  const ScanGrid g = scan_grid(config);
+  // Room for every ray: the pages of rays without a return are never touched.
+  const std::size_t rays = static_cast<std::size_t>(g.rows) * g.cols;
+  std::vector<Eigen::Vector3f> points;
+  std::vector<float> intensity;
+  std::vector<std::uint32_t> row_of, col_of;
+  points.reserve(rays);
   if (options.with_grid_indices) {
-    out.row.resize(total);
-    out.col.resize(total);
+    row_of.reserve(rays);
+    col_of.reserve(rays);
   }
-  if (options.with_intensity) out.intensity.resize(total);
-  std::atomic<std::uint32_t> next_copy{0};
-  detail::run_on_threads(threads, [&](bool) {
-    for (std::uint32_t r = next_copy++; r < g.rows; r = next_copy++) {
-      ScanRow& row = rows[r];
-      std::copy(row.points.begin(), row.points.end(),
-                out.points.begin() + static_cast<long>(offset[r]));
-      if (options.with_grid_indices) {
-        std::copy(row.col.begin(), row.col.end(), out.col.begin() + static_cast<long>(offset[r]));
-        std::fill_n(out.row.begin() + static_cast<long>(offset[r]), row.col.size(), r);
-      }
-      if (options.with_intensity)
-        std::copy(row.intensity.begin(), row.intensity.end(),
-                  out.intensity.begin() + static_cast<long>(offset[r]));
-      row = ScanRow();  // free as we go
+  if (options.with_intensity) intensity.reserve(rays);
+  Scan out;
+  for_each_scan_row(caster, config, pose, options, out, [&](std::uint32_t r, ScanRow&& row) {
+    points.insert(points.end(), row.points.begin(), row.points.end());
+    if (options.with_grid_indices) {
+      col_of.insert(col_of.end(), row.col.begin(), row.col.end());
+      row_of.insert(row_of.end(), row.col.size(), r);
     }
+    if (options.with_intensity)
+      intensity.insert(intensity.end(), row.intensity.begin(), row.intensity.end());
   });
+  out.points = std::move(points);
+  out.intensity = std::move(intensity);
+  out.row = std::move(row_of);
+  out.col = std::move(col_of);
   return out;
 }
 

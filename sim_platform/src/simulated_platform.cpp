@@ -64,21 +64,20 @@ IncomingScan SimulatedPlatform::scan() {
   IncomingScan in;
   Eigen::Vector3d origin;
   {
-    // Row by row into the cloud, each row freed once copied: the scan is never held twice.
+    // Row by row into the cloud as the rows are cast: the scan is never held twice.
     sim::Scan s;
-    std::vector<sim::ScanRow> rows =
-        sim::scan_rows(*caster_, scene_.scanner, robot_.true_pose(),
-                       points_only(*this, seed_ * 1000 + std::uint64_t(i)), s);
+    const sim::ScanGrid grid = sim::scan_grid(scene_.scanner);
+    auto cloud = std::make_shared<Cloud>();
+    // Room for every ray: the pages of rays without a return are never touched.
+    cloud->reserve(std::size_t(grid.rows) * grid.cols);
+    sim::for_each_scan_row(*caster_, scene_.scanner, robot_.true_pose(),
+                           points_only(*this, seed_ * 1000 + std::uint64_t(i)), s,
+                           [&](std::uint32_t, sim::ScanRow&& row) {
+                             for (const Eigen::Vector3f& q : row.points)
+                               cloud->push_back({q.x(), q.y(), q.z()});
+                           });
     last_sensor_to_world_ = s.sensor_to_world();
     origin = s.origin();
-    std::size_t total = 0;
-    for (const sim::ScanRow& row : rows) total += row.points.size();
-    auto cloud = std::make_shared<Cloud>();
-    cloud->reserve(total);
-    for (sim::ScanRow& row : rows) {
-      for (const Eigen::Vector3f& q : row.points) cloud->push_back({q.x(), q.y(), q.z()});
-      row = sim::ScanRow();
-    }
     in.points = cloud;
     last_points_ = cloud;
   }

@@ -78,11 +78,13 @@ struct ScanRow {
   std::vector<std::uint32_t> col;  // (the row is the index of the ScanRow)
 };
 
-// The scan `scan` would return, as its rows (row r at [r]), before they are gathered;
-// `header` gets Scan's other fields (its point vectors are left empty). A caller that
-// turns the points into its own type frees each row as it goes, and never holds the scan
-// twice (a lab scan's 5.4 M points are 65 MB).
-std::vector<ScanRow> scan_rows(const RayCaster& caster, const ScannerConfig& config,
-                               const Pose2& pose, const ScanOptions& options, Scan& header);
+// The scan `scan` would return, row by row: take_row(r, row) is called for r = 0, 1, ...
+// in grid order, on the calling thread, as the rows are cast (in parallel, a batch of
+// rows at a time). `header` gets Scan's other fields (its point vectors are left empty).
+// A caller that turns the points into its own type never holds the scan twice, and this
+// holds one batch of rows at most (a lab scan's 5.4 M points are 65 MB).
+void for_each_scan_row(const RayCaster& caster, const ScannerConfig& config, const Pose2& pose,
+                       const ScanOptions& options, Scan& header,
+                       const std::function<void(std::uint32_t row_index, ScanRow&& row)>& take_row);
 
 }  // namespace semioctree::sim
