@@ -10,28 +10,29 @@
 
 namespace semioctree {
 
-std::unique_ptr<SemiOcTree> with_markers(const SemiOcTree& tree, const std::vector<Point3>& scans,
-                                         const std::optional<Point3>& nbv) {
-  // A deep copy through the tree's own stream format (SemiOcTree is not
-  // copyable: OctoMap's copy would share the coarse index).
-  std::stringstream nodes;
-  tree.writeData(nodes);
-  std::unique_ptr<SemiOcTree> out(tree.create());
-  out->readData(nodes);
+namespace {
+
+// The markers of the exports: a cube of 3×3×3 leaves at each scan position labelled
+// `scan`, and at the NBV labelled `nbv` (after the scans: it wins where they meet).
+std::vector<LeafMark> marker_leaves(const SemiOcTree& tree, const std::vector<Point3>& scans,
+                                    const std::optional<Point3>& nbv) {
+  std::vector<LeafMark> marks;
   const double r = tree.leaf_size();
   auto mark = [&](const Point3& c, Label label) {
     for (int dz = -1; dz <= 1; ++dz)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
           octomap::OcTreeKey key;
-          if (out->key_of(Point3(c.x + dx * r, c.y + dy * r, c.z + dz * r), key))
-            out->set_label(key, out->leaf_level(), label);
+          if (tree.key_of(Point3(c.x + dx * r, c.y + dy * r, c.z + dz * r), key))
+            marks.push_back({key, label});
         }
   };
   for (const Point3& s : scans) mark(s, Label::kScan);
   if (nbv) mark(*nbv, Label::kNbv);
-  return out;
+  return marks;
 }
+
+}  // namespace
 
 void write_map_files(const SemiOcTree& tree, const std::string& dir, const SliceOptions& slice,
                      const MapFiles& names) {
@@ -40,13 +41,10 @@ void write_map_files(const SemiOcTree& tree, const std::string& dir, const Slice
   fs::create_directories(dir, ec);
   if (ec) throw FileError(dir + ": cannot create directory: " + ec.message());
   const fs::path d(dir);
-  const bool marked = !slice.scans.empty() || slice.nbv;
-  const std::unique_ptr<SemiOcTree> copy =
-      marked ? with_markers(tree, slice.scans, slice.nbv) : nullptr;
-  const SemiOcTree& files = marked ? *copy : tree;
-  write_tree_file(files, (d / names.semioctree).string());
-  write_tree_file(*to_color_octree(files), (d / names.color).string());
-  write_binary_file(*to_occupancy_octree(files), (d / names.occupancy).string());
+  const std::vector<LeafMark> marks = marker_leaves(tree, slice.scans, slice.nbv);
+  write_tree_file(tree, (d / names.semioctree).string());
+  write_tree_file(*to_color_octree(tree, marks), (d / names.color).string());
+  write_binary_file(*to_occupancy_octree(tree, marks), (d / names.occupancy).string());
   write_slice_png(tree, (d / names.slice).string(), slice);
 }
 

@@ -23,17 +23,14 @@ struct MapFiles {
   std::string slice = "slice.png";
 };
 
-// Creates `dir` if needed. Throws FileError. The two .ot files carry the
-// markers of docs/outputs.md: a cube of 3×3×3 leaves (the scanner's head) labelled
-// `scan` at every position of slice.scans and `nbv` at slice.nbv, so that
-// octovis shows where the scans stood and where to go next. `tree` itself is
-// not changed (the markers go into a copy); occupancy.bt shows them as free.
+// Creates `dir` if needed. Throws FileError. semioctree.ot is `tree` as it is; the two
+// OctoMap files (labels_color.ot, occupancy.bt) carry the markers of docs/outputs.md: a
+// cube of 3×3×3 leaves (the scanner's head) labelled `scan` at every position of
+// slice.scans and `nbv` at slice.nbv, so that octovis shows where the scans stood and
+// where to go next (occupancy.bt shows them as free). The markers are drawn into the
+// exports as they are built; `tree` is neither changed nor copied.
 void write_map_files(const SemiOcTree& tree, const std::string& dir, const SliceOptions& slice,
                      const MapFiles& names = {});
-
-// A copy of `tree` with those markers (what the .ot files hold).
-std::unique_ptr<SemiOcTree> with_markers(const SemiOcTree& tree, const std::vector<Point3>& scans,
-                                         const std::optional<Point3>& nbv);
 
 // One vertex of a PLY file: its position, and its colour and flag if the layout has them.
 struct PlyVertex {

@@ -17,36 +17,50 @@ class OctantPlacer : public TREE {
  public:
   using Node = typename TREE::NodeType;
   explicit OctantPlacer(double res) : TREE(res) {}
+  // The node of the octant at `key` and `depth`, created if need be. A node placed before
+  // at a coarser depth around it is split on the way (its eight children take its value):
+  // between calls, every node without children was placed (the nodes created on the way
+  // down each get a child).
   Node* place(const octomap::OcTreeKey& key, unsigned depth) {
+    bool created = false;
     if (!this->root) {
       this->root = new Node();
       this->tree_size = 1;
       this->size_changed = true;
+      created = true;
     }
     Node* n = this->root;
     for (unsigned d = 0; d < depth; ++d) {
+      if (!created && !this->nodeHasChildren(n)) this->expandNode(n);
       const unsigned idx = octomap::computeChildIdx(key, int(SemiOcTree::kTreeDepth - 1 - d));
-      n = this->nodeChildExists(n, idx) ? this->getNodeChild(n, idx)
-                                        : this->createNodeChild(n, idx);
+      created = !this->nodeChildExists(n, idx);
+      n = created ? this->createNodeChild(n, idx) : this->getNodeChild(n, idx);
     }
     return n;
   }
 };
 
-unsigned depth_of(const SemiOcTree& tree, const Octant& o) {
-  return tree.coarse_depth() + o.level;
+// Calls place(key, depth, label) for every labelled octant of `tree` (unknown ones are
+// left out), then for every mark, at the leaves' depth.
+template <class Place>
+void place_octants_and_marks(const SemiOcTree& tree, const std::vector<LeafMark>& marks,
+                             const Place& place) {
+  tree.for_each_octant([&](const Octant& o) {
+    if (o.label() != Label::kUnknown) place(o.key, tree.coarse_depth() + o.level, o.label());
+  });
+  for (const LeafMark& m : marks) place(m.key, SemiOcTree::kTreeDepth, m.label);
 }
 
 }  // namespace
 
-std::unique_ptr<octomap::ColorOcTree> to_color_octree(const SemiOcTree& tree) {
+std::unique_ptr<octomap::ColorOcTree> to_color_octree(const SemiOcTree& tree,
+                                                      const std::vector<LeafMark>& marks) {
   auto out = std::make_unique<OctantPlacer<octomap::ColorOcTree>>(tree.leaf_size());
   const float occupied = out->getClampingThresMaxLog();
-  tree.for_each_octant([&](const Octant& o) {
-    if (o.label() == Label::kUnknown) return;
-    auto* node = out->place(o.key, depth_of(tree, o));
+  place_octants_and_marks(tree, marks, [&](const octomap::OcTreeKey& key, unsigned depth, Label l) {
+    auto* node = out->place(key, depth);
     node->setLogOdds(occupied);
-    const Rgb c = label_color(o.label());
+    const Rgb c = label_color(l);
     node->setColor(c.r, c.g, c.b);
   });
   // Inner nodes: occupancy = max of children, colour = average (not drawn).
@@ -56,14 +70,15 @@ std::unique_ptr<octomap::ColorOcTree> to_color_octree(const SemiOcTree& tree) {
   return out;
 }
 
-std::unique_ptr<octomap::OcTree> to_occupancy_octree(const SemiOcTree& tree) {
+std::unique_ptr<octomap::OcTree> to_occupancy_octree(const SemiOcTree& tree,
+                                                     const std::vector<LeafMark>& marks) {
   auto out = std::make_unique<OctantPlacer<octomap::OcTree>>(tree.leaf_size());
   const float occupied = out->getClampingThresMaxLog();
   const float free = out->getClampingThresMinLog();
-  tree.for_each_octant([&](const Octant& o) {
-    const Occupancy occ = label_occupancy(o.label());
+  place_octants_and_marks(tree, marks, [&](const octomap::OcTreeKey& key, unsigned depth, Label l) {
+    const Occupancy occ = label_occupancy(l);
     if (occ == Occupancy::kUnknown) return;
-    out->place(o.key, depth_of(tree, o))->setLogOdds(occ == Occupancy::kOccupied ? occupied : free);
+    out->place(key, depth)->setLogOdds(occ == Occupancy::kOccupied ? occupied : free);
   });
   out->updateInnerOccupancy();
   return out;

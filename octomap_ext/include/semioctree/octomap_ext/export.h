@@ -12,13 +12,25 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "semioctree/octomap_ext/semioctree.h"
 
 namespace semioctree {
 
-std::unique_ptr<octomap::ColorOcTree> to_color_octree(const SemiOcTree& tree);
-std::unique_ptr<octomap::OcTree> to_occupancy_octree(const SemiOcTree& tree);
+// One leaf drawn over the map in an export with a label of its own (where a scanner
+// stood, the next view): the export shows it as if the map held it there, the octant
+// around it split so that the rest keeps its label. The map itself is not touched.
+struct LeafMark {
+  octomap::OcTreeKey key;  // of a leaf
+  Label label = Label::kUnknown;
+};
+
+// Later marks win where they meet.
+std::unique_ptr<octomap::ColorOcTree> to_color_octree(const SemiOcTree& tree,
+                                                      const std::vector<LeafMark>& marks = {});
+std::unique_ptr<octomap::OcTree> to_occupancy_octree(const SemiOcTree& tree,
+                                                     const std::vector<LeafMark>& marks = {});
 
 struct PlyOptions {
   bool include_unknown = false;  // unknown octants are skipped by default
