@@ -571,8 +571,12 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     constexpr int kMaxCounts = 13;
     const double goal = 0.99 * double(p.target_points);
     const double target = double(p.target_points);
-    // A table of at most twice the target at once (count_cells).
-    const std::size_t cap = 2 * p.target_points;
+    // A table of at most twice the target at once (count_cells): as many keys as fill a
+    // power of two of slots (one key more would double the table).
+    using CellTable = PackedKeyMap<std::uint8_t>;
+    std::size_t slots = 64;
+    while (CellTable::keys_held_in(2 * slots) <= 2 * p.target_points) slots *= 2;
+    const std::size_t cap = CellTable::keys_held_in(slots) - 1;
     auto count_cut = [&](double s) { return double(count_cells_of(after_cut, each_cut, s, cap)); };
     double s0 = std::max(spacing, 0.01), c0 = count_cut(s0);
     double s1 = std::max(spacing, s0 * std::sqrt(c0 / goal));

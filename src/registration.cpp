@@ -87,15 +87,20 @@ class BoundedKdTree : public pcl::search::KdTree<PointN> {
   std::vector<std::uint8_t> oriented_;
 };
 
-// Voxel-grid downsampling (one centroid per occupied voxel). PCL's VoxelGrid
-// refuses grids of more than 2^31 cells (it then returns the input unchanged,
-// e.g. a 0.05 m grid over a 60 m-range scan with outliers), so such clouds are
-// cut into slabs along x that each fit and filtered slab by slab.
-Cloud::Ptr voxel_downsample(const Cloud& in, double leaf) {
+// Voxel-grid downsampling (one centroid per occupied voxel) of `in`, or of the points of
+// `in` that `indices` lists (all of them when null). PCL's VoxelGrid refuses grids of more
+// than 2^31 cells (it then returns the input unchanged, e.g. a 0.05 m grid over a 60
+// m-range scan with outliers), so such clouds are cut into slabs along x that each fit and
+// filtered slab by slab.
+Cloud::Ptr voxel_downsample(const Cloud& in, double leaf,
+                            const pcl::IndicesConstPtr& indices = nullptr) {
   Cloud::Ptr out(new Cloud);
-  if (in.empty()) return out;
+  if (indices ? indices->empty() : in.empty()) return out;
   Eigen::Vector4f lo, hi;
-  pcl::getMinMax3D(in, lo, hi);
+  if (indices)
+    pcl::getMinMax3D(in, *indices, lo, hi);
+  else
+    pcl::getMinMax3D(in, lo, hi);
   if (!lo.allFinite() || !hi.allFinite()) return out;  // no finite point
   auto cells = [&](int axis) { return std::int64_t(std::floor((hi[axis] - lo[axis]) / leaf)) + 1; };
   const std::int64_t nx = cells(0), nyz = cells(1) * cells(2);
@@ -107,18 +112,23 @@ Cloud::Ptr voxel_downsample(const Cloud& in, double leaf) {
   grid.setLeafSize(float(leaf), float(leaf), float(leaf));
   if (slabs <= 1) {
     grid.setInputCloud(Cloud::ConstPtr(&in, [](const Cloud*) {}));  // lent, not copied
+    if (indices) grid.setIndices(indices);
     grid.filter(*out);
     return out;
   }
   std::vector<Cloud::Ptr> parts(std::size_t(slabs), nullptr);
   const double width = double(slab_cells) * leaf;
-  for (const auto& p : in) {
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+  auto to_slab = [&](const pcl::PointXYZ& p) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return;
     const auto s = std::min<std::int64_t>(slabs - 1, std::int64_t((p.x - lo.x()) / width));
     auto& part = parts[std::size_t(s)];
     if (!part) part.reset(new Cloud);
     part->push_back(p);
-  }
+  };
+  if (indices)
+    for (const auto i : *indices) to_slab(in[std::size_t(i)]);
+  else
+    for (const auto& p : in) to_slab(p);
   for (const auto& part : parts) {
     if (!part) continue;
     Cloud filtered;
@@ -129,9 +139,9 @@ Cloud::Ptr voxel_downsample(const Cloud& in, double leaf) {
   return out;
 }
 
-// The points of `cloud` inside the bounding box of `around` grown by `margin` on every
-// side: `cloud` itself (lent, not copied) when all of it is inside.
-Cloud::ConstPtr near_box(const Cloud& cloud, const Cloud& around, double margin) {
+// The indices of the points of `cloud` inside the bounding box of `around` grown by
+// `margin` on every side; null when all of them are.
+pcl::IndicesPtr near_box(const Cloud& cloud, const Cloud& around, double margin) {
   Eigen::Vector4f lo, hi;
   pcl::getMinMax3D(around, lo, hi);
   const Eigen::Array3f grow = Eigen::Array3f::Constant(float(margin));
@@ -141,11 +151,11 @@ Cloud::ConstPtr near_box(const Cloud& cloud, const Cloud& around, double margin)
     return (v >= low).all() && (v <= high).all();
   };
   const auto n = std::size_t(std::count_if(cloud.begin(), cloud.end(), inside));
-  if (n == cloud.size()) return Cloud::ConstPtr(&cloud, [](const Cloud*) {});
-  Cloud::Ptr out(new Cloud);
+  if (n == cloud.size()) return nullptr;
+  pcl::IndicesPtr out(new pcl::Indices);
   out->reserve(n);
-  for (const auto& q : cloud)
-    if (inside(q)) out->push_back(q);
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    if (inside(cloud[i])) out->push_back(pcl::index_t(i));
   return out;
 }
 
@@ -282,7 +292,7 @@ RegistrationResult register_scan(const Cloud& source, const Cloud& target,
   RegistrationResult r;
   const Cloud::Ptr src_ds = voxel_downsample(source, p.voxel);
   const double reach = 2.0 * p.max_correspondence;
-  const Cloud::Ptr tgt_ds = voxel_downsample(*near_box(target, *src_ds, reach), p.voxel);
+  const Cloud::Ptr tgt_ds = voxel_downsample(target, p.voxel, near_box(target, *src_ds, reach));
   r.source_points = src_ds->size();
   r.target_points = tgt_ds->size();
   if (r.source_points >= p.min_points && r.target_points < p.min_points && !target.empty()) {

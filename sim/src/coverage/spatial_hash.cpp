@@ -21,18 +21,15 @@ std::uint64_t slot_hash(std::uint64_t x) {
 
 }  // namespace
 
-PointHash::PointHash(std::vector<Eigen::Vector3d> points, double cell) : cell_(cell) {
+PointHash::PointHash(const std::vector<Eigen::Vector3d>& points, double cell)
+    : cell_(cell), points_(points) {
   std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
   keyed.reserve(points.size());
   for (std::size_t i = 0; i < points.size(); ++i)
     keyed.emplace_back(cell_key(points[i]), static_cast<std::uint32_t>(i));
   std::sort(keyed.begin(), keyed.end());
-  points_.reserve(points.size());
-  original_.reserve(points.size());
-  for (const auto& k : keyed) {
-    points_.push_back(points[k.second]);
-    original_.push_back(k.second);
-  }
+  by_cell_.reserve(points.size());
+  for (const auto& k : keyed) by_cell_.push_back(k.second);
   std::size_t capacity = 16;
   std::size_t cells = 0;
   for (std::size_t i = 0; i < keyed.size(); ++i)

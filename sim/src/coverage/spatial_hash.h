@@ -10,11 +10,12 @@
 
 namespace semioctree::sim::detail {
 
-// Open addressing over the keys of the occupied cells; the points of a cell are stored
-// together. At most 2^32 − 1 points.
+// Open addressing over the keys of the occupied cells; the indices of a cell's points are
+// stored together, the points themselves are read where they are given (they must outlive
+// the hash and not change). At most 2^32 − 1 points.
 class PointHash {
  public:
-  PointHash(std::vector<Eigen::Vector3d> points, double cell);
+  PointHash(const std::vector<Eigen::Vector3d>& points, double cell);
 
   // Calls f(i) for each point within `radius` (at most half the cell size) of q, i its
   // index in the vector given to the constructor. Such a ball meets at most the 2 × 2 × 2
@@ -36,7 +37,7 @@ class PointHash {
           const Slot* s = find(grid_cell_key(x, y, z));
           if (!s) continue;
           for (std::uint32_t k = s->begin; k < s->begin + s->count; ++k)
-            if ((points_[k] - q).squaredNorm() <= r2) f(original_[k]);
+            if ((points_[by_cell_[k]] - q).squaredNorm() <= r2) f(by_cell_[k]);
         }
   }
 
@@ -51,8 +52,8 @@ class PointHash {
   const Slot* find(std::uint64_t key) const;
 
   double cell_;
-  std::vector<Eigen::Vector3d> points_;  // ordered by cell key
-  std::vector<std::uint32_t> original_;  // per entry of points_: its index as given
+  const std::vector<Eigen::Vector3d>& points_;
+  std::vector<std::uint32_t> by_cell_;  // the points' indices, ordered by cell key
   std::vector<Slot> slots_;
 };
 

@@ -37,6 +37,10 @@ class PackedKeyMap {
 
   // Sized for `expected` keys without growing.
   explicit PackedKeyMap(std::size_t expected = 0) { reserve(expected); }
+  // The most keys a table of `slots` slots (a power of two) holds without growing.
+  static constexpr std::size_t keys_held_in(std::size_t slots) {
+    return slots * kMaxLoadPercent / 100;
+  }
 
   const Value* find(std::uint64_t key) const {
     assert(key != kNoKey);
