@@ -2,7 +2,6 @@
 
 #include <filesystem>
 #include <ostream>
-#include <sstream>
 #include <string>
 
 #include "semioctree/octomap_ext/export.h"
