@@ -8,7 +8,8 @@ cd "$(dirname "$0")"
 
 PACKAGES=(build-essential cmake ninja-build pkg-config
   liboctomap-dev libdynamicedt3d-dev libeigen3-dev libpcl-dev libembree-dev
-  libgtest-dev libbenchmark-dev nlohmann-json3-dev libcli11-dev libpng-dev libcairo2-dev octomap-tools)
+  libgtest-dev libbenchmark-dev nlohmann-json3-dev libcli11-dev libpng-dev libcairo2-dev octomap-tools
+  libnanoflann-dev)
 BUILD_DIR=${SEMIOCTREE_BUILD_DIR:-build}
 
 install_dependencies() {

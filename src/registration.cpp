@@ -17,8 +17,10 @@
 #include <cstdint>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <vector>
 
+#include "kd_tree_n.h"
 #include "parallel_for.h"
 #include "random_subset.h"
 #include "semioctree/timing.h"
@@ -46,34 +48,30 @@ class Icp : public pcl::IterativeClosestPoint<PointN, PointN, double> {
 // With the surfaces' facing known (SurfaceFacing), a source point with a normal pairs
 // with the nearest target point within the bound whose surface faces the same way (or
 // whose facing is unknown): the two faces of a wall are not confused.
-class BoundedKdTree : public pcl::search::KdTree<PointN> {
+class BoundedKdTree : public detail::KdTreeN {
  public:
   using Ptr = pcl::shared_ptr<BoundedKdTree>;
   void set_bound(double distance) { bound_ = distance; }
   // Per target point: 1 if its normal is oriented (the side it was seen from), 0 if not.
   void set_oriented(std::vector<std::uint8_t> oriented) { oriented_ = std::move(oriented); }
-  using pcl::search::KdTree<PointN>::nearestKSearch;
+  using detail::KdTreeN::nearestKSearch;
   int nearestKSearch(const PointN& point, int k, pcl::Indices& indices,
                      std::vector<float>& sqr_distances) const override {
-    if (k != 1 || !(bound_ > 0))
-      return pcl::search::KdTree<PointN>::nearestKSearch(point, k, indices, sqr_distances);
+    if (k != 1 || !(bound_ > 0)) return KdTreeN::nearestKSearch(point, k, indices, sqr_distances);
     const Eigen::Vector3f n = point.getNormalVector3fMap();
-    if (oriented_.empty() || n.squaredNorm() < 0.5f) {
-      // A radius search keeping one neighbour returns the nearest within the radius.
-      if (radiusSearch(point, bound_, indices, sqr_distances, 1) > 0) return 1;
-    } else {
-      // The nearest few, nearest first: the first on a surface facing the same way.
-      constexpr unsigned kFacingCandidates = 8;
-      pcl::Indices near;
-      std::vector<float> d2;
-      const int found = radiusSearch(point, bound_, near, d2, kFacingCandidates);
-      for (int i = 0; i < found; ++i) {
-        const PointN& t = (*input_)[near[i]];
-        if (!oriented_[near[i]] || n.dot(t.getNormalVector3fMap()) > 0.0f) {
-          indices.assign(1, near[i]);
-          sqr_distances.assign(1, d2[i]);
-          return 1;
-        }
+    // The nearest within the bound, or the nearest few, nearest first: the first on a
+    // surface facing the same way.
+    constexpr int kFacingCandidates = 8;
+    const bool facing = !oriented_.empty() && n.squaredNorm() >= 0.5f;
+    int near[kFacingCandidates];
+    float d2[kFacingCandidates];
+    const int found = nearest_within(point, facing ? kFacingCandidates : 1, bound_, near, d2);
+    for (int i = 0; i < found; ++i) {
+      const PointN& t = (*input_)[std::size_t(near[i])];
+      if (!facing || !oriented_[std::size_t(near[i])] || n.dot(t.getNormalVector3fMap()) > 0.0f) {
+        indices.assign(1, near[i]);
+        sqr_distances.assign(1, d2[i]);
+        return 1;
       }
     }
     // None: report one "infinitely far" neighbour, which the caller rejects.
@@ -181,14 +179,14 @@ CloudN::Ptr shifted(const Cloud& in, const Eigen::Vector3d& offset) {
 // returns) keep a zero normal: they then add nothing to the point-to-plane error.
 // Returns the number of points given a normal. Each point's normal is its own: the same
 // on any number of `threads` (0: one per core).
-std::size_t estimate_normals(CloudN& cloud, const pcl::search::KdTree<PointN>& tree, double radius,
+std::size_t estimate_normals(CloudN& cloud, const detail::KdTreeN& tree, double radius,
                              unsigned threads) {
   constexpr int k = 12;
   constexpr std::size_t kChunk = 1024;
   const unsigned workers = detail::thread_count(threads);
   struct Scratch {
     pcl::Indices nn;
-    std::vector<float> d2;
+    float d2[k];
     std::size_t with_normal = 0;
   };
   std::vector<Scratch> scratch(workers);
@@ -197,10 +195,8 @@ std::size_t estimate_normals(CloudN& cloud, const pcl::search::KdTree<PointN>& t
         Scratch& s = scratch[w];
         for (std::size_t i = c * kChunk, end = std::min(cloud.size(), i + kChunk); i < end; ++i) {
           PointN& q = cloud[i];
-          // The k nearest, less those beyond the radius: the same neighbours as a radius
-          // search keeping k, and cheaper where the radius holds many more than k.
-          int found = tree.nearestKSearch(q, k, s.nn, s.d2);
-          while (found > 0 && s.d2[std::size_t(found - 1)] > radius * radius) --found;
+          s.nn.resize(k);
+          const int found = tree.nearest_within(q, k, radius, s.nn.data(), s.d2);
           s.nn.resize(std::size_t(found));
           if (found < 3) continue;
           Eigen::Matrix3f cov;
@@ -246,7 +242,7 @@ std::vector<std::uint8_t> orient_target(CloudN& cloud, const Eigen::Vector3d& of
 void normals_facing(CloudN& cloud, double radius, const Eigen::Vector3f& viewpoint,
                     unsigned threads, const CloudN::ConstPtr& neighbours = nullptr) {
   if (cloud.empty()) return;
-  pcl::search::KdTree<PointN> tree;
+  detail::KdTreeN tree;
   tree.setInputCloud(neighbours ? neighbours : pcl::make_shared<CloudN>(cloud));
   estimate_normals(cloud, tree, radius, threads);
   for (PointN& q : cloud) {

@@ -9,6 +9,10 @@ if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/test_registration.cpp)
   endif()
   target_include_directories(test_registration PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
 endif()
+# The kd-tree of registration (src/kd_tree_n.h, header only, over nanoflann).
+semioctree_add_test(test_kd_tree SOURCES test_kd_tree.cpp LIBS semioctree)
+target_include_directories(test_kd_tree PRIVATE ${PROJECT_SOURCE_DIR})
+target_link_libraries(test_kd_tree PRIVATE nanoflann::nanoflann)
 # Registration without a pose over lab pairs and the real scan's moved copy (JSON).
 if(TARGET semioctree_sim)
   semioctree_add_bench(bench_global_registration SOURCES bench_global_registration.cpp
