@@ -53,23 +53,33 @@ struct DirectionBins {
     const int r = row(d.elevation);
     return first[r] + column(r, d.fraction);
   }
-  // bin(d) and d.length of direction(dx, dy, dz, d), the angles from polynomial_atan2: its
-  // value ± its error bound maps to one row (one column) whenever std::atan2's would give
-  // the same one (the maps below only round and scale: they never decrease), so only
-  // where that margin straddles an edge is std::atan2 asked. False as direction().
-  bool bin_and_length(double dx, double dy, double dz, int& b, double& length) const {
+  // A return's vector with its angles from polynomial_atan2 (Angles::of), which bin_of
+  // maps to bins of any k: one computation of the angles serves several binnings.
+  struct Angles {
+    double dx = 0, dy = 0, dz = 0, horizontal = 0, length = 0, up = 0, around = 0;
+    // False as direction().
+    static bool of(double x, double y, double z, Angles& a) {
+      const double horizontal2 = x * x + y * y;
+      a.dx = x, a.dy = y, a.dz = z;
+      a.horizontal = std::sqrt(horizontal2);
+      a.length = std::sqrt(horizontal2 + z * z);
+      if (!(std::isfinite(a.length) && a.length > 0)) return false;
+      a.up = detail::polynomial_atan2(z, a.horizontal);
+      a.around = detail::polynomial_atan2(y, x);
+      return true;
+    }
+  };
+  // bin(d) of direction(dx, dy, dz, d) from the polynomial angles: their value ± their
+  // error bound maps to one row (one column) whenever std::atan2's would give the same one
+  // (the maps below only round and scale: they never decrease), so only where that margin
+  // straddles an edge is std::atan2 asked.
+  int bin_of(const Angles& a) const {
     constexpr double e = detail::kPolynomialAtan2Error;
-    const double horizontal2 = dx * dx + dy * dy, horizontal = std::sqrt(horizontal2);
-    length = std::sqrt(horizontal2 + dz * dz);
-    if (!(std::isfinite(length) && length > 0)) return false;
-    const double up = detail::polynomial_atan2(dz, horizontal);
-    int r = row(elevation_of(up - e));
-    if (r != row(elevation_of(up + e))) r = row(elevation_of(std::atan2(dz, horizontal)));
-    const double around = detail::polynomial_atan2(dy, dx);
-    int c = column(r, fraction_of(around - e));
-    if (c != column(r, fraction_of(around + e))) c = column(r, fraction(dx, dy));
-    b = first[r] + c;
-    return true;
+    int r = row(elevation_of(a.up - e));
+    if (r != row(elevation_of(a.up + e))) r = row(elevation_of(std::atan2(a.dz, a.horizontal)));
+    int c = column(r, fraction_of(a.around - e));
+    if (c != column(r, fraction_of(a.around + e))) c = column(r, fraction(a.dx, a.dy));
+    return first[r] + c;
   }
   // The bin of a direction given as a vector (not zero).
   int bin_of(double dx, double dy, double dz) const {
@@ -338,31 +348,54 @@ bool ReturnDirections::has(double dx, double dy, double dz) const {
 }
 
 void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanner_to_map,
-                                unsigned threads) {
+                                unsigned threads, int expected_depth_bins_per_degree) {
   depth_per_degree_ = 0;
   depth_cm_.clear();
   const unsigned workers = detail::thread_count(threads);
   const std::size_t chunk = 1 << 16, chunks = (scan.size() + chunk - 1) / chunk;
-  // f(bin, length) for each return of chunk c, in the map frame, binned by `bins`.
-  auto each_return = [&](std::size_t c, const DirectionBins& bins, auto&& f) {
-    int b = 0;
-    double length = 0;
+  // f(angles) for each return of chunk c, in the map frame.
+  auto each_return = [&](std::size_t c, auto&& f) {
+    DirectionBins::Angles a;
     for (std::size_t i = c * chunk, end = std::min(scan.size(), i + chunk); i < end; ++i) {
       const Eigen::Vector3d v = scanner_to_map * Eigen::Vector3d(scan[i].x, scan[i].y, scan[i].z);
-      if (bins.bin_and_length(v.x(), v.y(), v.z(), b, length)) f(std::size_t(b), length);
+      if (DirectionBins::Angles::of(v.x(), v.y(), v.z(), a)) f(a);
     }
   };
-  // Pass 1: the 1° bins with returns, and how many returns they hold.
+  // The depths, per bin of k a degree: the nearest and farthest return and their count.
+  struct Depths {
+    std::vector<float> nearest, farthest;
+    std::vector<std::uint8_t> count;
+    void add(const DirectionBins& bins, const DirectionBins::Angles& a) {
+      if (count.empty()) {
+        nearest.assign(std::size_t(bins.total), std::numeric_limits<float>::infinity());
+        farthest.assign(std::size_t(bins.total), 0.0f);
+        count.assign(std::size_t(bins.total), 0);
+      }
+      const auto b = std::size_t(bins.bin_of(a));
+      const auto range = float(a.length);
+      nearest[b] = std::min(nearest[b], range);
+      farthest[b] = std::max(farthest[b], range);
+      if (count[b] < 255) ++count[b];
+    }
+  };
+  // Pass 1: the 1° bins with returns, and how many returns they hold. With the depths'
+  // k expected (the scan before's, say), their depths are gathered in the same pass from
+  // the same angles; pass 2 reads the returns again only if k turns out otherwise.
   const DirectionBins& degree = direction_bins(1);
+  const int expected_k = expected_depth_bins_per_degree;
+  const bool gather_depths = expected_k >= 1 && expected_k <= DirectionBins::kMaxPerDegree;
+  const DirectionBins& expected_bins = direction_bins(gather_depths ? expected_k : 1);
   constexpr float kNone = std::numeric_limits<float>::infinity();
   std::vector<std::vector<float>> nearest(workers);
   std::vector<std::size_t> returns(workers, 0);
+  std::vector<Depths> per_worker(workers);
   detail::parallel_for(chunks, workers, 1, [&](std::size_t c, unsigned w) {
     if (nearest[w].empty()) nearest[w].assign(std::size_t(degree.total), kNone);
-    each_return(c, degree, [&](std::size_t b, double length) {
-      float& n = nearest[w][b];
-      n = std::min(n, float(length));
+    each_return(c, [&](const DirectionBins::Angles& a) {
+      float& n = nearest[w][std::size_t(degree.bin_of(a))];
+      n = std::min(n, float(a.length));
       ++returns[w];
+      if (gather_depths) per_worker[w].add(expected_bins, a);
     });
   });
   std::size_t total_returns = 0;
@@ -379,30 +412,18 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
     ++hit_bins;
   }
   if (hit_bins == 0) return;
-  // Pass 2: the depths, in bins holding about 4 returns each (two beams along each axis).
+  // Pass 2 (unless gathered above): the depths, in bins holding about 4 returns each (two
+  // beams along each axis).
   const int k =
       std::clamp(int(std::floor(std::sqrt(double(total_returns) / double(hit_bins) / 4.0))), 1,
                  DirectionBins::kMaxPerDegree);
   const DirectionBins& bins = direction_bins(k);
-  struct Depths {
-    std::vector<float> nearest, farthest;
-    std::vector<std::uint8_t> count;
-  };
-  std::vector<Depths> per_worker(workers);
-  detail::parallel_for(chunks, workers, 1, [&](std::size_t c, unsigned w) {
-    Depths& d = per_worker[w];
-    if (d.count.empty()) {
-      d.nearest.assign(std::size_t(bins.total), std::numeric_limits<float>::infinity());
-      d.farthest.assign(std::size_t(bins.total), 0.0f);
-      d.count.assign(std::size_t(bins.total), 0);
-    }
-    each_return(c, bins, [&](std::size_t b, double length) {
-      const auto range = float(length);
-      d.nearest[b] = std::min(d.nearest[b], range);
-      d.farthest[b] = std::max(d.farthest[b], range);
-      if (d.count[b] < 255) ++d.count[b];
+  if (!gather_depths || k != expected_k) {
+    per_worker.assign(workers, Depths{});
+    detail::parallel_for(chunks, workers, 1, [&](std::size_t c, unsigned w) {
+      each_return(c, [&](const DirectionBins::Angles& a) { per_worker[w].add(bins, a); });
     });
-  });
+  }
   constexpr int kMinReturns = 4;
   depth_cm_.assign(std::size_t(bins.total), 0);
   for (std::size_t b = 0; b < depth_cm_.size(); ++b) {
@@ -471,7 +492,7 @@ std::shared_ptr<const ReturnDirections> return_directions(const Cloud& scan,
                                                           const Eigen::Matrix3d& scanner_to_map,
                                                           const ReturnDirectionsOptions& options) {
   auto r = std::make_shared<ReturnDirections>();
-  r->add_scan(scan, scanner_to_map, options.threads);
+  r->add_scan(scan, scanner_to_map, options.threads, options.expected_depth_bins_per_degree);
   r->close_gaps();
   if (options.open_above) r->open_above();
   r->open_within(options.body, options.min_range);

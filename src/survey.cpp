@@ -333,6 +333,10 @@ const ScanRecord& Survey::add_scan_telling(
   if (!map_.empty()) {  // what the scans before saw free around this one
     returns.map = &map_.tree();
     returns.optical_centre = scanner;
+    // The same scanner most likely bins its depths as it did in the scan before.
+    const std::vector<ScannerView> views = map_.views();
+    if (views.back().returns)
+      returns.expected_depth_bins_per_degree = views.back().returns->depth_bins_per_degree();
   }
   t0 = Clock::now();
   std::shared_ptr<const ReturnDirections> seen_directions =

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <random>
 #include <set>
@@ -737,6 +738,52 @@ TEST(Occlusion, ReturnDirectionsRecordHowFarEachDirectionSaw) {
   sparse.add_scan(lattice_scan(1.0, -60, 60, -40, 40, walls), Eigen::Matrix3d::Identity());
   EXPECT_EQ(sparse.depth_bins_per_degree(), 1);
   EXPECT_FALSE(sparse.behind_surface(9, 1.5, 0, leaf));
+}
+
+// add_scan with the depths' k expected (the survey passes the scan before's) reads the
+// returns once when the guess is right, twice when not: the directions and depths are the
+// same either way, on any number of threads.
+TEST(Occlusion, AnExpectedDepthBinningChangesNothing) {
+  auto walls = [](const Eigen::Vector3d& d) {  // a box room, 3 × 4 × 1.5 m half-sizes
+    double t = std::numeric_limits<double>::infinity();
+    const double half[3] = {3.0, 4.0, 1.5};
+    for (int a = 0; a < 3; ++a)
+      if (d[a] != 0) t = std::min(t, half[a] / std::abs(d[a]));
+    return t;
+  };
+  const Cloud scan = lattice_scan(0.2, -180, 180, -60, 90, walls);
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()).matrix();
+  ReturnDirections plain;
+  plain.add_scan(scan, turn, 1);
+  ASSERT_EQ(plain.depth_bins_per_degree(), 2);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), range(0.5, 6.0);
+  std::vector<Eigen::Vector3d> probes;
+  for (int i = 0; i < 20000; ++i) {
+    const Eigen::Vector3d d(u(rng), u(rng), u(rng));
+    if (d.norm() > 1e-3) probes.push_back(range(rng) * d.normalized());
+  }
+  for (const int expected : {0, 1, 2, 3, 8})
+    for (const unsigned threads : {1u, 3u}) {
+      ReturnDirections r;
+      r.add_scan(scan, turn, threads, expected);
+      EXPECT_EQ(r.depth_bins_per_degree(), plain.depth_bins_per_degree());
+      EXPECT_EQ(r.bins_with_returns(), plain.bins_with_returns());
+      std::size_t differ = 0, behind = 0;
+      for (const Eigen::Vector3d& p : probes) {
+        const bool b = r.behind_surface(p.x(), p.y(), p.z(), 0.05);
+        behind += b;
+        differ += b != plain.behind_surface(p.x(), p.y(), p.z(), 0.05) ||
+                  r.has(p.x(), p.y(), p.z()) != plain.has(p.x(), p.y(), p.z());
+      }
+      EXPECT_EQ(differ, 0u) << "expected k " << expected << ", " << threads << " threads";
+      EXPECT_GT(behind, probes.size() / 10);  // the probes do reach behind the walls
+      // The holes' rule reads the nearest returns pass 1 records.
+      ReturnDirections opened = r, plain_opened = plain;
+      opened.open_far_edged_holes(0.6, -60, 90);
+      plain_opened.open_far_edged_holes(0.6, -60, 90);
+      EXPECT_EQ(opened.bins_with_returns(), plain_opened.bins_with_returns());
+    }
 }
 
 // The map does not hold every surface a scan met: preprocessing cuts the ceiling's and

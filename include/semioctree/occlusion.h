@@ -86,7 +86,11 @@ class ReturnDirections {
   // plus the spread of its returns (a beam between two of the bin's may reach that much
   // further on a surface seen at a grazing angle); a bin with fewer than 4 returns
   // records none. Replaces the depths recorded before. `threads`: 0, one per core.
-  void add_scan(const Cloud& scan, const Eigen::Matrix3d& scanner_to_map, unsigned threads = 0);
+  // `expected_depth_bins_per_degree`: the k this scan is expected to get (the scan
+  // before's, say; 0: none). When it is right the returns are read once, not twice; the
+  // result is the same either way.
+  void add_scan(const Cloud& scan, const Eigen::Matrix3d& scanner_to_map, unsigned threads = 0,
+                int expected_depth_bins_per_degree = 0);
   // Whether a point at (dx, dy, dz) from the optical centre (map frame) lies more than
   // `tolerance` (m) beyond the depth of its bin: every beam around its direction met a
   // surface before it, so the scan cannot have seen it, whatever the map holds there.
@@ -129,6 +133,9 @@ struct ReturnDirectionsOptions {
   const SemiOcTree* map = nullptr;
   Point3 optical_centre;
   unsigned threads = 0;  // reading the scan's returns (0: one per core)
+  // add_scan's expected k (the scan before's depth_bins_per_degree(); 0: none): reads
+  // the returns once instead of twice when right, the same result either way.
+  int expected_depth_bins_per_degree = 0;
 };
 
 // The returns of a scan given in the scanner's frame (optical centre at the origin),
