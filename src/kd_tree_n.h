@@ -18,14 +18,12 @@
 namespace semioctree::detail {
 
 // The k nearest points within a bound, as a nanoflann result set: nearest first, each at
-// a squared distance of at most max_d2 (the points PCL's radius search keeps too).
+// a squared distance below max_d2 (strictly, as PCL's FLANN radius search keeps them).
 class NearestWithin {
  public:
+  // indices and d2: room for k each (k ≤ 0: nothing is kept).
   NearestWithin(int k, float max_d2, int* indices, float* d2)
-      : k_(k),
-        bound_(std::nextafter(max_d2, std::numeric_limits<float>::infinity())),
-        indices_(indices),
-        d2_(d2) {}
+      : k_(std::max(k, 0)), bound_(max_d2), indices_(indices), d2_(d2) {}
   std::size_t size() const { return std::size_t(n_); }
   bool full() const { return n_ == k_; }
   // nanoflann offers the points nearer than worstDist(), read once a leaf: a point may
@@ -38,27 +36,32 @@ class NearestWithin {
     if (n_ < k_) ++n_;
     return true;
   }
-  float worstDist() const { return n_ == k_ ? d2_[k_ - 1] : bound_; }
+  float worstDist() const { return n_ == k_ && k_ > 0 ? d2_[k_ - 1] : bound_; }
 
  private:
   int k_, n_ = 0;
-  float bound_;  // just above max_d2: nanoflann offers the points strictly nearer
+  float bound_;  // nanoflann offers the points strictly nearer than worstDist()
   int* indices_;
   float* d2_;
 };
 
 // A kd-tree over a PointNormal cloud behind PCL's KdTree interface, answered by nanoflann
-// (leaves of 10 points): the same neighbours, nearest first, as PCL's FLANN tree, in
-// about half the time for the k nearest and a quarter for the nearest within a bound
-// (docs/registration.md, "What it costs"). Searches are const and may run in parallel.
+// (leaves of 10 points): the neighbours PCL's FLANN tree finds (within a radius: strictly
+// nearer than it), nearest first, in about half the time for the k nearest and a quarter
+// for the nearest within a bound (docs/registration.md, "What it costs"). Points at equal
+// distances may come in another order. Searches are const and may run in parallel.
 class KdTreeN : public pcl::search::KdTree<pcl::PointNormal> {
  public:
   using PointN = pcl::PointNormal;
   using CloudN = pcl::PointCloud<PointN>;
   using Ptr = pcl::shared_ptr<KdTreeN>;
 
-  // The whole cloud (a subset given by indices: std::invalid_argument). The cloud must
-  // outlive the tree and keep its points where they are.
+  KdTreeN() = default;
+  KdTreeN(const KdTreeN&) = delete;  // nanoflann's index refers to this tree's points_
+  KdTreeN& operator=(const KdTreeN&) = delete;
+
+  // The whole cloud, of finite points (a subset given by indices: std::invalid_argument).
+  // The cloud must outlive the tree and keep its points where they are.
   void setInputCloud(const PointCloudConstPtr& cloud,
                      const IndicesConstPtr& indices = IndicesConstPtr()) override {
     if (indices) throw std::invalid_argument("KdTreeN: searches over a subset are not supported");
@@ -69,12 +72,12 @@ class KdTreeN : public pcl::search::KdTree<pcl::PointNormal> {
     if (cloud && !cloud->empty())
       index_ = std::make_unique<Index>(3, points_, nanoflann::KDTreeSingleIndexAdaptorParams(10));
   }
-  // The (up to) k nearest points within `radius` of p (squared distance ≤ radius²),
-  // nearest first, into indices[0..) and d2[0..) (room for k each); returns how many.
+  // The (up to) k nearest points within `radius` of p (squared distance < radius², in
+  // floats as PCL's), nearest first, into indices[0..) and d2[0..) (room for k each);
+  // returns how many. An infinite radius bounds nothing; a NaN one finds nothing.
   int nearest_within(const PointN& p, int k, double radius, int* indices, float* d2) const {
-    if (k <= 0 || !index_) return 0;
-    const float max_d2 =
-        std::isfinite(radius) ? float(radius * radius) : std::numeric_limits<float>::max();
+    if (k <= 0 || !index_ || !(radius > 0)) return 0;
+    const float max_d2 = float(radius * radius);  // infinity stays infinite
     NearestWithin found(k, max_d2, indices, d2);
     index_->findNeighbors(found, p.data, nanoflann::SearchParams());
     return int(found.size());

@@ -1,6 +1,6 @@
 // The kd-tree of registration (src/kd_tree_n.h): its neighbours are the brute-force
-// ones (the k nearest within a bound, nearest first, a point at exactly the bound
-// included), through nanoflann and through PCL's search interface that ICP calls.
+// ones (the k nearest strictly within a bound, nearest first, as PCL's FLANN radius
+// search keeps them), through nanoflann and through PCL's search interface that ICP calls.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -35,15 +35,15 @@ CloudN::Ptr random_cloud(std::size_t n, unsigned seed) {
   return cloud;
 }
 
-// Every point of `cloud` within `radius` of q (squared distance ≤ radius², as the tree
-// computes it), nearest first, at most k.
+// Every point of `cloud` within `radius` of q (squared distance < radius² in floats, as
+// the tree computes it), nearest first, at most k.
 std::vector<std::pair<float, int>> brute_force(const CloudN& cloud, const pcl::PointNormal& q,
                                                int k, double radius) {
   std::vector<std::pair<float, int>> near;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const float dx = cloud[i].x - q.x, dy = cloud[i].y - q.y, dz = cloud[i].z - q.z;
     const float d2 = dx * dx + dy * dy + dz * dz;
-    if (double(d2) <= radius * radius) near.emplace_back(d2, int(i));
+    if (d2 < float(radius * radius)) near.emplace_back(d2, int(i));
   }
   std::sort(near.begin(), near.end());
   if (int(near.size()) > k) near.resize(std::size_t(k));
@@ -73,22 +73,32 @@ TEST(KdTree, TheKNearestWithinTheBoundAreTheBruteForceOnes) {
   }
 }
 
-TEST(KdTree, APointAtExactlyTheRadiusIsWithinIt) {
+TEST(KdTree, APointAtExactlyTheRadiusIsLeftOutAsPclsRadiusSearchDoes) {
   CloudN::Ptr cloud(new CloudN);
-  cloud->push_back(at(0.5f, 0, 0));                           // 0.5 m: d² = 0.25 exactly
-  cloud->push_back(at(std::nextafter(0.5f, 1.0f), 0.1f, 0));  // just beyond
-  cloud->push_back(at(0, 0.25f, 0));                          // well within
+  cloud->push_back(at(0.5f, 0, 0));                        // 0.5 m: d² = 0.25 exactly
+  cloud->push_back(at(std::nextafter(0.5f, 0.0f), 0, 0));  // just within
+  cloud->push_back(at(0, 0.25f, 0));                       // well within
   KdTreeN tree;
   tree.setInputCloud(cloud);
   pcl::Indices idx;
   std::vector<float> d2;
   ASSERT_EQ(tree.radiusSearch(at(0, 0, 0), 0.5, idx, d2), 2);
-  EXPECT_EQ(idx, (pcl::Indices{2, 0}));
-  EXPECT_EQ(d2[1], 0.25f);
+  EXPECT_EQ(idx, (pcl::Indices{2, 1}));
+  EXPECT_LT(d2[1], 0.25f);
   ASSERT_EQ(tree.radiusSearch(at(0, 0, 0), 0.5, idx, d2, 1), 1);
   EXPECT_EQ(idx[0], 2);
   EXPECT_EQ(tree.radiusSearch(at(0, 0, 0), 0.2, idx, d2), 0);
   EXPECT_TRUE(idx.empty());
+  // PCL's own tree over the same cloud: the same answer.
+  pcl::search::KdTree<pcl::PointNormal> pcl_tree;
+  pcl_tree.setInputCloud(cloud);
+  pcl::Indices pcl_idx;
+  std::vector<float> pcl_d2;
+  ASSERT_EQ(pcl_tree.radiusSearch(at(0, 0, 0), 0.5, pcl_idx, pcl_d2), 2);
+  EXPECT_EQ(pcl_idx, (pcl::Indices{2, 1}));
+  // No radius, or a NaN one: nothing.
+  EXPECT_EQ(tree.radiusSearch(at(0, 0, 0), 0.0, idx, d2), 0);
+  EXPECT_EQ(tree.radiusSearch(at(0, 0, 0), std::nan(""), idx, d2), 0);
 }
 
 TEST(KdTree, PclSearchesAnswerAsNanoflannDoes) {
