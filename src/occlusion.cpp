@@ -361,16 +361,18 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
       if (DirectionBins::Angles::of(v.x(), v.y(), v.z(), a)) f(a);
     }
   };
-  // The depths, per bin of k a degree: the nearest and farthest return and their count.
+  // The depths, per bin of k a degree: the nearest and farthest return and their count
+  // (sized for the bins once, by a worker's first chunk).
   struct Depths {
     std::vector<float> nearest, farthest;
     std::vector<std::uint8_t> count;
+    void size_for(const DirectionBins& bins) {
+      if (!count.empty()) return;
+      nearest.assign(std::size_t(bins.total), std::numeric_limits<float>::infinity());
+      farthest.assign(std::size_t(bins.total), 0.0f);
+      count.assign(std::size_t(bins.total), 0);
+    }
     void add(const DirectionBins& bins, const DirectionBins::Angles& a) {
-      if (count.empty()) {
-        nearest.assign(std::size_t(bins.total), std::numeric_limits<float>::infinity());
-        farthest.assign(std::size_t(bins.total), 0.0f);
-        count.assign(std::size_t(bins.total), 0);
-      }
       const auto b = std::size_t(bins.bin_of(a));
       const auto range = float(a.length);
       nearest[b] = std::min(nearest[b], range);
@@ -391,6 +393,7 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
   std::vector<Depths> per_worker(workers);
   detail::parallel_for(chunks, workers, 1, [&](std::size_t c, unsigned w) {
     if (nearest[w].empty()) nearest[w].assign(std::size_t(degree.total), kNone);
+    if (gather_depths) per_worker[w].size_for(expected_bins);
     each_return(c, [&](const DirectionBins::Angles& a) {
       float& n = nearest[w][std::size_t(degree.bin_of(a))];
       n = std::min(n, float(a.length));
@@ -421,6 +424,7 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
   if (!gather_depths || k != expected_k) {
     per_worker.assign(workers, Depths{});
     detail::parallel_for(chunks, workers, 1, [&](std::size_t c, unsigned w) {
+      per_worker[w].size_for(bins);
       each_return(c, [&](const DirectionBins::Angles& a) { per_worker[w].add(bins, a); });
     });
   }

@@ -9,7 +9,6 @@
 #include <pcl/registration/transformation_estimation_point_to_plane.h>
 #include <pcl/registration/transformation_estimation_point_to_plane_lls.h>
 #include <pcl/registration/warp_point_rigid_3d.h>
-#include <pcl/search/kdtree.h>
 
 #include <algorithm>
 #include <chrono>
