@@ -56,12 +56,16 @@ endif()
 # Surveys of generated scenes (eval_generated, a benchmark-style program printing JSON), and
 # a subset of them as a test with the acceptance thresholds (docs/generated-scenes.md).
 # Built with the benchmarks only: the sanitizer build of CI, which has none, skips the test.
+if(TARGET semioctree_sim_platform AND SEMIOCTREE_BUILD_BENCHMARKS)
+  # The CLI's planning options, compiled once for the three programs that take them.
+  add_library(semioctree_planning_options STATIC ${PROJECT_SOURCE_DIR}/src/cli/planning_options.cpp)
+  target_link_libraries(semioctree_planning_options PUBLIC semioctree_sim_platform CLI11::CLI11)
+  target_include_directories(semioctree_planning_options PUBLIC ${PROJECT_SOURCE_DIR}/src/cli)
+endif()
 if(TARGET semioctree_sim_platform)
   semioctree_add_bench(eval_generated SOURCES eval_generated.cpp
-                       ${PROJECT_SOURCE_DIR}/src/cli/planning_options.cpp
-                       LIBS semioctree_sim_platform nlohmann_json::nlohmann_json)
+                       LIBS semioctree_planning_options nlohmann_json::nlohmann_json)
   if(TARGET eval_generated)
-    target_include_directories(eval_generated PRIVATE ${PROJECT_SOURCE_DIR}/src/cli)
     # Rooms 1-8 with the acceptance thresholds (docs/generated-scenes.md); OFF skips them
     # (ctest lists the test as disabled) on a machine where minutes per scene are too many.
     option(SEMIOCTREE_TEST_GENERATED_SCENES
@@ -87,10 +91,6 @@ if(TARGET semioctree_sim_platform)
   # against OctoMap's insert of the same scans.
   foreach(bench bench_floor bench_update)
     semioctree_add_bench(${bench} SOURCES ${bench}.cpp
-                         ${PROJECT_SOURCE_DIR}/src/cli/planning_options.cpp
-                         LIBS semioctree_sim_platform nlohmann_json::nlohmann_json)
-    if(TARGET ${bench})
-      target_include_directories(${bench} PRIVATE ${PROJECT_SOURCE_DIR}/src/cli)
-    endif()
+                         LIBS semioctree_planning_options nlohmann_json::nlohmann_json)
   endforeach()
 endif()

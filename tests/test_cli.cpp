@@ -232,15 +232,18 @@ TEST(Cli, MapNbvTakesAnOctomapMapOrASemioctree) {
   for (const char* f : {"labels_color.ot", "occupancy.bt", "slice.png"})
     EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
 
-  // Our own .ot is taken as it is: the same NBV.
-  const CliRun again = run_cli("map-nbv --map " + (dir / "out" / "semioctree.ot").string() +
-                               " --scanner 3,2.5,1.5 --out " + (dir / "again").string());
-  ASSERT_EQ(again.exit_code, 0) << again.all();
-  std::ifstream in2(dir / "again" / "nbv.json");
-  const auto k = nlohmann::json::parse(in2);
-  ASSERT_FALSE(k["nbv"].is_null());
-  EXPECT_DOUBLE_EQ(k["nbv"]["x"].get<double>(), nx);
-  EXPECT_DOUBLE_EQ(k["nbv"]["y"].get<double>(), ny);
+  // Our own .ot is taken as it is: the same NBV. (Sanitized, the reader's tests and its
+  // fuzz target stand for this second run of the whole command.)
+  if (!testing::sanitized()) {
+    const CliRun again = run_cli("map-nbv --map " + (dir / "out" / "semioctree.ot").string() +
+                                 " --scanner 3,2.5,1.5 --out " + (dir / "again").string());
+    ASSERT_EQ(again.exit_code, 0) << again.all();
+    std::ifstream in2(dir / "again" / "nbv.json");
+    const auto k = nlohmann::json::parse(in2);
+    ASSERT_FALSE(k["nbv"].is_null());
+    EXPECT_DOUBLE_EQ(k["nbv"]["x"].get<double>(), nx);
+    EXPECT_DOUBLE_EQ(k["nbv"]["y"].get<double>(), ny);
+  }
 
   // A map of the points alone holds no free space: no directions, and it says so.
   octomap::OcTree points_only(0.05);

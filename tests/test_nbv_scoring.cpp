@@ -389,10 +389,11 @@ TEST(Nbv, WallShadowsProveOnlyBlockedLines) {
       if (m.t.find_octant(p)->label() == Label::kEmpty) positions.push_back(p);
     }
     positions.push_back({2.425, 1.45, 1.3});  // in the door
-    for (int i = 0; i < 600; ++i) ends.push_back({ux(rng), ux(rng), uz(rng)});
-    std::size_t occluded = 0;  // every 7th occluded octant's centre
+    for (int i = 0; i < (kSanitized ? 200 : 600); ++i) ends.push_back({ux(rng), ux(rng), uz(rng)});
+    std::size_t occluded = 0;  // every 7th occluded octant's centre (21st sanitized)
     m.t.for_each_octant([&](const Octant& o) {
-      if (o.label() == Label::kOccluded && occluded++ % 7 == 0) ends.push_back(o.center);
+      if (o.label() == Label::kOccluded && occluded++ % (kSanitized ? 21 : 7) == 0)
+        ends.push_back(o.center);
     });
     for (const bool doors_pass : {false, true}) {
       const nbv_detail::BlockingColumns columns(m.t, doors_pass, 1.3, {0, 0, 0}, {4.8, 4.8, 0}, 0.0,
@@ -596,6 +597,58 @@ TEST(Nbv, TheChoiceWeighsTheScoreByTheTravelWeight) {
   EXPECT_DOUBLE_EQ(light.stop_percent, far_eq5);
   p.travel_weight = -1;
   EXPECT_THROW(best_view_among(room.t, two, p), std::invalid_argument);
+}
+
+// Eq 5 of a method-1 NBV with doors blocking is taken from its score, not traced again:
+// in a room with a partition, a door, a table and occluded space of several sizes, every
+// candidate's score is in proportion to Eq 5 traced from it (the blocker cache, the
+// memo of blockers across candidates and the walls' shadows only prove blocks), and
+// with doors passing, Eq 5 still counts doors as blocking.
+TEST(Nbv, TheStopPercentageTakenFromTheScoreIsEq5TracedFromTheCandidate) {
+  Map m(6, 6, 3);  // 4.8 × 4.8 × 2.4 m
+  m.walls(4.8, 4.8, 2.4);
+  m.leaves({2.4, 0, 0}, {2.45, 3.2, 2.4}, Label::kOccupied);         // a partition at x = 2.4 m
+  m.leaves({2.4, 3.2, 0}, {2.45, 4.0, 2.0}, Label::kDoor);           // its door; a gap beyond
+  m.leaves({0.8, 0.8, 0.7}, {1.6, 1.6, 0.75}, Label::kOccupied);     // a table top
+  m.leaves({0.85, 0.85, 0.1}, {1.55, 1.55, 0.3}, Label::kOccluded);  // under it
+  m.set(4.0, 1.2, 1.2, 1, Label::kOccluded);                         // behind the partition, coarse
+  m.leaves({3.0, 0.4, 0.1}, {3.6, 1.2, 0.4}, Label::kOccluded);      // and leaf by leaf
+  m.set(3.2, 2.0, 0.4, 2, Label::kOccluded);
+  m.set(3.2, 2.4, 0.4, 2, Label::kOccluded);  // behind the one above: 1/(1 + n)
+  m.set(3.4, 4.4, 2.2, 3, Label::kOccluded);  // beyond the door
+  m.set(0.4, 4.4, 2.2, 2, Label::kOccluded);  // in view of the west room
+  m.set(4.4, 4.4, 0.4, 2, Label::kUnknown);
+  for (const bool with_room : {false, true}) {
+    NbvParams p;  // method 1, the scanner's default limits
+    if (with_room) p.room = RoomBox{{0, 0, 0}, {3.0, 4.8, 2.4}};
+    std::vector<NbvCandidate> grid;
+    for (double x = 0.4; x < 4.6; x += 1.2)
+      for (double y = 0.4; y < 4.6; y += 1.2) grid.push_back(at(x, y, 0));
+    ASSERT_GE(grid.size(), 8u);  // scored a candidate at a time, the memo shared
+    const NbvResult all = best_view_among(m.t, grid, p);
+    ASSERT_TRUE(all.best);
+    const double best_eq5 = stop_percentage(m.t, all.best->position, p.limits, 1, p.room);
+    ASSERT_GT(best_eq5, 0);
+    EXPECT_NEAR(all.stop_percent, best_eq5, 1e-9 * best_eq5);
+    EXPECT_GT(all.scoring.blocked_by_walls, 0u);
+    EXPECT_GT(all.scoring.blocked_by_cache, 0u);
+    bool door_matters = false;
+    for (const NbvCandidate& c : all.candidates) {
+      const double eq5 = stop_percentage(m.t, c.position, p.limits, 1, p.room);
+      EXPECT_NEAR(c.score / all.best->score, eq5 / best_eq5, 1e-9)
+          << "at " << c.position.x << ", " << c.position.y;
+      // One candidate at a time (blocks of targets spread over the threads), doors
+      // passing for the score: Eq 5 keeps them blocking.
+      NbvParams doors = p;
+      doors.see_through_doors = true;
+      doors.threads = 2;
+      const NbvResult one = best_view_among(m.t, {c}, doors);
+      ASSERT_TRUE(one.best);
+      EXPECT_NEAR(one.stop_percent, eq5, 1e-9 * std::max(eq5, 1.0));
+      door_matters = door_matters || one.best->score > c.score * (1 + 1e-9);
+    }
+    EXPECT_TRUE(door_matters);  // else the last check could not fail
+  }
 }
 
 }  // namespace

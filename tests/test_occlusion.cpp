@@ -740,18 +740,59 @@ TEST(Occlusion, ReturnDirectionsRecordHowFarEachDirectionSaw) {
   EXPECT_FALSE(sparse.behind_surface(9, 1.5, 0, leaf));
 }
 
+// For lattice_scan: the range to the walls of a box room of 3 × 4 × 1.5 m half-sizes
+// around the scanner.
+double box_room_walls(const Eigen::Vector3d& d) {
+  double t = std::numeric_limits<double>::infinity();
+  const double half[3] = {3.0, 4.0, 1.5};
+  for (int a = 0; a < 3; ++a)
+    if (d[a] != 0) t = std::min(t, half[a] / std::abs(d[a]));
+  return t;
+}
+
+// may_see_box over a box says what may_see says at each of its points: `all` only when
+// every point may be seen, `none` only when none may (the exact octants' proofs rest on
+// it), for boxes of a leaf to a coarse voxel in and around a room, in two frames.
+TEST(Occlusion, ABoxIsJudgedAsEachOfItsPointsIs) {
+  const double leaf = 0.05;
+  for (const double turn_rad : {0.0, 0.3}) {
+    const Eigen::Matrix3d turn = Eigen::AngleAxisd(turn_rad, Eigen::Vector3d::UnitZ()).matrix();
+    ReturnDirections r;
+    r.add_scan(lattice_scan(0.2, -180, 180, -60, 90, box_room_walls), turn, 1);
+    ASSERT_EQ(r.depth_bins_per_degree(), 2);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::size_t all = 0, none = 0;
+    for (int k = 0; k < 1200; ++k) {
+      const double size = 0.05 * double(1 << (k % 5));  // 0.05 to 0.8 m
+      const Eigen::Vector3d lo(-4.5 + 9 * u(rng), -5.5 + 11 * u(rng), -2 + 4 * u(rng));
+      const Eigen::Vector3d hi = lo + Eigen::Vector3d::Constant(size);
+      const ReturnDirections::BoxSight sight = r.may_see_box(lo, hi, leaf);
+      ASSERT_FALSE(sight.all && sight.none);
+      all += sight.all;
+      none += sight.none;
+      if (!sight.all && !sight.none) continue;
+      // Its corners, a lattice through it and random points.
+      std::vector<Eigen::Vector3d> points;
+      for (int i = 0; i <= 4; ++i)
+        for (int j = 0; j <= 4; ++j)
+          for (int l = 0; l <= 4; ++l) points.push_back(lo + Eigen::Vector3d(i, j, l) * size / 4);
+      for (int i = 0; i < 40; ++i)
+        points.push_back(lo + size * Eigen::Vector3d(u(rng), u(rng), u(rng)));
+      for (const Eigen::Vector3d& p : points)
+        ASSERT_EQ(r.may_see(p.x(), p.y(), p.z(), leaf), sight.all)
+            << "box " << lo.transpose() << " + " << size << ", point " << p.transpose();
+    }
+    EXPECT_GT(all, 100u);  // else the checks above could hardly fail
+    EXPECT_GT(none, 100u);
+  }
+}
+
 // add_scan with the depths' k expected (the survey passes the scan before's) reads the
 // returns once when the guess is right, twice when not: the directions and depths are the
 // same either way, on any number of threads.
 TEST(Occlusion, AnExpectedDepthBinningChangesNothing) {
-  auto walls = [](const Eigen::Vector3d& d) {  // a box room, 3 × 4 × 1.5 m half-sizes
-    double t = std::numeric_limits<double>::infinity();
-    const double half[3] = {3.0, 4.0, 1.5};
-    for (int a = 0; a < 3; ++a)
-      if (d[a] != 0) t = std::min(t, half[a] / std::abs(d[a]));
-    return t;
-  };
-  const Cloud scan = lattice_scan(0.2, -180, 180, -60, 90, walls);
+  const Cloud scan = lattice_scan(0.2, -180, 180, -60, 90, box_room_walls);
   const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()).matrix();
   ReturnDirections plain;
   plain.add_scan(scan, turn, 1);

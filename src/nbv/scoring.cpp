@@ -166,10 +166,8 @@ std::vector<double> score_positions(const SemiOcTree& tree, const std::vector<Po
 
 namespace {
 
-// Eq 5 from `nbv` over `targets`, method 1's targets in `room`.
-double stop_percentage_over(const SemiOcTree& tree, const std::vector<Target>& targets,
-                            const Point3& nbv, const ScannerView& limits, unsigned threads,
-                            const std::optional<RoomBox>& room) {
+// Eq 5's denominator: the volume of all but unknown space (m³), inside `room` if given.
+double counted_volume(const SemiOcTree& tree, const std::optional<RoomBox>& room) {
   double total = 0;
   if (room) {
     tree.for_each_octant([&](const Octant& o) {
@@ -181,6 +179,14 @@ double stop_percentage_over(const SemiOcTree& tree, const std::vector<Target>& t
                     Label::kWindow, Label::kScan, Label::kNbv})
       total += stats.volume[static_cast<int>(l)];
   }
+  return total;
+}
+
+// Eq 5 from `nbv` over `targets`, method 1's targets in `room`.
+double stop_percentage_over(const SemiOcTree& tree, const std::vector<Target>& targets,
+                            const Point3& nbv, const ScannerView& limits, unsigned threads,
+                            const std::optional<RoomBox>& room) {
+  const double total = counted_volume(tree, room);
   if (total <= 0) return 0.0;
   const ScannerLimits lim(limits);
   // Each target's share seen: its Eq 4 term (1, 1/(1+n) or 0).
@@ -318,12 +324,24 @@ NbvResult best_view_among(const SemiOcTree& tree, std::vector<NbvCandidate> cand
   res.seconds_overlap = seconds_since(t0);
   t0 = Clock::now();
   if (res.best) {
-    // Eq 5 counts method 1's targets, whatever the score's method.
+    // Eq 5 counts method 1's targets, whatever the score's method, with doors blocking.
+    // A method-1 score with doors blocking is Eq 5's sum already: the same targets, the
+    // same lines and shares 1/(1 + n) (the blocker cache and the walls' shadows only
+    // prove blocks that the traversal would find), in leaf volumes. Then only the
+    // volume is counted; else the targets' lines are traversed again from the NBV.
+    const bool from_score = params.method == 1 && !params.see_through_doors;
     const std::vector<Target> method1 =
         params.method == 1 ? std::vector<Target>() : method1_targets(tree, params.room);
     const std::vector<Target>& eq5_targets = params.method == 1 ? targets : method1;
-    res.stop_percent = stop_percentage_over(tree, eq5_targets, res.best->position, params.limits,
-                                            params.threads, params.room);
+    const double total = from_score ? counted_volume(tree, params.room) : 0;
+    const double leaf_volume = std::pow(tree.leaf_size(), 3);
+    const auto eq5_at = [&](const NbvCandidate& c) {
+      if (!from_score)
+        return stop_percentage_over(tree, eq5_targets, c.position, params.limits, params.threads,
+                                    params.room);
+      return total > 0 ? 100.0 * c.score * leaf_volume / total : 0.0;
+    };
+    res.stop_percent = eq5_at(*res.best);
     // Weighed by the path, the NBV may see less than the highest-scoring candidate: what
     // that one would still see keeps the survey going (a far view of much hidden space),
     // unless it was passed over for its overlap.
@@ -333,9 +351,7 @@ NbvResult best_view_among(const SemiOcTree& tree, std::vector<NbvCandidate> cand
     const bool weighed = params.travel_weight > 0;
     const bool passed_over = top.predicted_overlap && *top.predicted_overlap < params.min_overlap;
     if (weighed && top.score > res.best->score && !passed_over)
-      res.stop_percent = std::max(
-          res.stop_percent, stop_percentage_over(tree, eq5_targets, top.position, params.limits,
-                                                 params.threads, params.room));
+      res.stop_percent = std::max(res.stop_percent, eq5_at(top));
   }
   res.seconds_stop = seconds_since(t0);
   return res;

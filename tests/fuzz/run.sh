@@ -49,30 +49,51 @@ trap 'rm -rf "$SCRATCH" "$SEMIOCTREE_FUZZ_SCRATCH"' EXIT
 # Leaks are findings too; UBSan reports abort (the build has -fno-sanitize-recover).
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1}
-failed=()
 budget="$SECONDS_EACH s"
 [ -z "${FUZZ_RUNS:-}" ] || budget="$FUZZ_RUNS runs"
-for t in "${TARGETS[@]}"; do
-  corpus="$SCRATCH/$t"
-  findings="$BUILD_DIR/findings/$t"
+# One target: fuzzes, then writes its report to $SCRATCH/<target>.report and its status
+# to $SCRATCH/<target>.status (0: no finding).
+fuzz_target() {
+  local t=$1 corpus="$SCRATCH/$1" findings="$BUILD_DIR/findings/$1" dict log start status
   mkdir -p "$corpus" "$findings"
   cp tests/fuzz/corpus/"$t"/* "$corpus"/
-  args=(-timeout=25 -rss_limit_mb=2048 -max_len=8192 -print_final_stats=1
+  local args=(-timeout=25 -rss_limit_mb=2048 -max_len=8192 -print_final_stats=1
     -artifact_prefix="$findings/")
   if [ -n "${FUZZ_RUNS:-}" ]; then args+=(-runs="$FUZZ_RUNS"); else args+=(-max_total_time="$SECONDS_EACH"); fi
   dict=$(dictionary_of "$t")
   [ -n "$dict" ] && args+=(-dict="$dict")
-  echo "== $t ($budget)"
   log="$SCRATCH/$t.log"
   start=$(date +%s)
-  if "$BUILD_DIR/tests/fuzz/$t" "${args[@]}" "$corpus" >"$log" 2>&1; then
-    grep -E "^stat::(number_of_executed_units|average_exec_per_sec|peak_rss_mb)" "$log" || true
-    echo "wall time: $(($(date +%s) - start)) s"
-  else
-    tail -n 60 "$log"
-    echo "== $t: FINDING, input kept in $findings/" >&2
-    failed+=("$t")
+  status=0
+  "$BUILD_DIR/tests/fuzz/$t" "${args[@]}" "$corpus" >"$log" 2>&1 || status=$?
+  {
+    echo "== $t ($budget)"
+    if ((status == 0)); then
+      grep -E "^stat::(number_of_executed_units|average_exec_per_sec|peak_rss_mb)" "$log" || true
+      echo "wall time: $(($(date +%s) - start)) s"
+    else
+      tail -n 60 "$log"
+      echo "== $t: FINDING, input kept in $findings/"
+    fi
+  } >"$SCRATCH/$t.report"
+  echo "$status" >"$SCRATCH/$t.status"
+}
+# As many targets at once as cores (SEMIOCTREE_FUZZ_JOBS): each fuzzes on one.
+jobs_at_once=${SEMIOCTREE_FUZZ_JOBS:-$(nproc)}
+running=0
+for t in "${TARGETS[@]}"; do
+  if ((running >= jobs_at_once)); then
+    wait -n || true
+    running=$((running - 1))
   fi
+  fuzz_target "$t" &
+  running=$((running + 1))
+done
+wait
+failed=()
+for t in "${TARGETS[@]}"; do
+  cat "$SCRATCH/$t.report"
+  [ "$(cat "$SCRATCH/$t.status" 2>/dev/null)" = 0 ] || failed+=("$t")
 done
 if ((${#failed[@]})); then
   echo "fuzzing found problems in: ${failed[*]}" >&2
