@@ -173,9 +173,11 @@ BoxDirections box_directions(const Eigen::Vector3d& lo, const Eigen::Vector3d& h
   return d;
 }
 
-// f(bin) for every bin of `b` that directions of `d` fall in, until f returns false.
+// f(r, i0, i1) for every row r of `b` that directions of `d` fall in, with the columns
+// i0 ≤ i ≤ i1 they fall in (i1 ≥ count[r] across −180°: column i % count[r]), until f
+// returns false.
 template <class F>
-void for_each_bin_of(const DirectionBins& b, const BoxDirections& d, F&& f) {
+void for_each_row_of(const DirectionBins& b, const BoxDirections& d, F&& f) {
   const int r0 = std::clamp(int(d.elevation_lo * b.per_degree), 0, b.rows - 1);
   const int r1 = std::clamp(int(d.elevation_hi * b.per_degree), 0, b.rows - 1);
   for (int r = r0; r <= r1; ++r) {
@@ -186,9 +188,52 @@ void for_each_bin_of(const DirectionBins& b, const BoxDirections& d, F&& f) {
       i1 = b.column(r, d.fraction_hi);
       if (i1 < i0) i1 += n;  // across −180°
     }
-    for (int i = i0; i <= i1; ++i)
-      if (!f(b.first[r] + i % n)) return;
+    if (!f(r, i0, i1)) return;
   }
+}
+
+// f(bin) for every bin of `b` that directions of `d` fall in, until f returns false.
+template <class F>
+void for_each_bin_of(const DirectionBins& b, const BoxDirections& d, F&& f) {
+  for_each_row_of(b, d, [&](int r, int i0, int i1) {
+    for (int i = i0; i <= i1; ++i)
+      if (!f(b.first[r] + i % b.count[r])) return false;
+    return true;
+  });
+}
+
+// The range [lo, hi] of one component of the unit directions of a bin.
+struct Range {
+  double lo = -1, hi = 1;
+};
+
+// Bounds on the distance of a box's points that lie in a bin's directions, from the
+// ranges of their components over the bin: a point p = t·u of the box with
+// lo_a ≤ p_a ≤ hi_a on axis a and u_a > 0 has t ≥ lo_a / max u_a and t ≤ hi_a / min u_a
+// (mirrored for u_a < 0). The bounds hold on each axis, so their tightest one holds.
+struct BinDistance {
+  double entry = 0;                                       // no point of it in the bin is nearer
+  double exit = std::numeric_limits<double>::infinity();  // nor farther
+  bool empty = false;  // no point of the box lies in the bin's directions
+  void axis(double lo, double hi, const Range& u) {
+    if ((lo > 0 && u.hi <= 0) || (hi < 0 && u.lo >= 0) || (hi <= 0 && u.lo > 0) ||
+        (lo >= 0 && u.hi < 0))
+      empty = true;
+    if (lo > 0 && u.hi > 0) entry = std::max(entry, lo / u.hi);
+    if (hi < 0 && u.lo < 0) entry = std::max(entry, hi / u.lo);
+    if (u.lo > 0) exit = std::min(exit, hi / u.lo);
+    if (u.hi < 0) exit = std::min(exit, lo / u.hi);
+  }
+};
+
+// Margin on the components' ranges: far above the rounding of the angles that decide
+// the bin of a direction, and of the rotations that step from column to column.
+constexpr double kRangeMargin = 1e-9;
+
+// The range of cos·a over elevations with cos ∈ c (c.lo ≥ 0) and a ∈ a.
+Range times(const Range& c, const Range& a) {
+  return {(a.lo < 0 ? c.hi : c.lo) * a.lo - kRangeMargin,
+          (a.hi < 0 ? c.lo : c.hi) * a.hi + kRangeMargin};
 }
 
 // Whether a point at distance² `length2` lies more than `tolerance` beyond `cm`, a depth
@@ -462,13 +507,60 @@ ReturnDirections::BoxSight ReturnDirections::may_see_box(const Eigen::Vector3d& 
   });
   if (none_has) return {false, true};
   if (!all_have || depth_cm_.empty()) return {all_have, false};
+  // First each depth bin against the whole box's nearest and farthest points (cheap);
+  // where that proves neither, each bin against the distances of the box's points in
+  // its own directions (BinDistance): a box before a wall seen obliquely, or behind one,
+  // spans bins whose depths differ by more than the box is deep.
+  const DirectionBins& b = direction_bins(depth_per_degree_);
   const double near2 = d.nearest * d.nearest, far2 = d.farthest * d.farthest;
   bool all_before = true, all_behind = true;
-  for_each_bin_of(direction_bins(depth_per_degree_), d, [&](int bin) {
+  for_each_bin_of(b, d, [&](int bin) {
     const std::uint16_t cm = depth_cm_[std::size_t(bin)];
     all_before &= !beyond_depth(cm, far2, tolerance);
     all_behind &= beyond_depth(cm, near2, tolerance);
     return all_before || all_behind;
+  });
+  if (all_before || all_behind) return {all_before, all_behind};
+  all_before = all_behind = true;
+  for_each_row_of(b, d, [&](int r, int i0, int i1) {
+    const double el0 = (double(r) / b.per_degree - 90.0) * (M_PI / 180.0);
+    const double el1 = (double(r + 1) / b.per_degree - 90.0) * (M_PI / 180.0);
+    const double c0 = std::cos(el0), c1 = std::cos(el1);
+    const Range cos_el{std::max(0.0, std::min(c0, c1) - kRangeMargin),
+                       (el0 <= 0 && el1 >= 0 ? 1.0 : std::max(c0, c1)) + kRangeMargin};
+    const Range uz{std::sin(el0) - kRangeMargin, std::sin(el1) + kRangeMargin};
+    const int n = b.count[r];
+    // The azimuth −π + 2π·i/n of each column's first edge, stepped by a rotation.
+    const double step = 2 * M_PI / n, step_cos = std::cos(step), step_sin = std::sin(step);
+    double az_cos = std::cos(-M_PI + step * i0), az_sin = std::sin(-M_PI + step * i0);
+    for (int i = i0; i <= i1; ++i) {
+      const double next_cos = az_cos * step_cos - az_sin * step_sin;
+      const double next_sin = az_sin * step_cos + az_cos * step_sin;
+      Range cos_az, sin_az;  // [-1, 1] for the polar rows' wide bins
+      if (n >= 4) {
+        cos_az = {std::min(az_cos, next_cos), std::max(az_cos, next_cos)};
+        sin_az = {std::min(az_sin, next_sin), std::max(az_sin, next_sin)};
+        if (az_sin <= 0 && next_sin >= 0 && az_cos + next_cos > 0) cos_az.hi = 1;   // 0
+        if (az_sin >= 0 && next_sin <= 0 && az_cos + next_cos < 0) cos_az.lo = -1;  // ±π
+        if (az_cos >= 0 && next_cos <= 0 && az_sin + next_sin > 0) sin_az.hi = 1;   // π/2
+        if (az_cos <= 0 && next_cos >= 0 && az_sin + next_sin < 0) sin_az.lo = -1;  // −π/2
+      }
+      BinDistance t;
+      t.axis(lo.x(), hi.x(), times(cos_el, cos_az));
+      t.axis(lo.y(), hi.y(), times(cos_el, sin_az));
+      t.axis(lo.z(), hi.z(), uz);
+      if (!t.empty) {
+        const std::uint16_t cm = depth_cm_[std::size_t(b.first[r] + i % n)];
+        const double before = std::min(t.exit, d.farthest);
+        const double behind = std::max(t.entry, d.nearest);
+        all_before &= !beyond_depth(cm, before * before, tolerance);
+        all_behind &= beyond_depth(cm, behind * behind, tolerance);
+        if (!(all_before || all_behind)) return false;
+      }
+      az_cos = next_cos;
+      az_sin = next_sin;
+    }
+    return true;
   });
   return {all_before, all_behind};
 }

@@ -788,6 +788,32 @@ TEST(Occlusion, ABoxIsJudgedAsEachOfItsPointsIs) {
   }
 }
 
+// A box before or behind a wall seen obliquely spans depth bins whose depths differ by
+// more than the box is deep: each bin is compared with the distances of the box's points
+// in its own directions, so such a box is proven where its nearest (farthest) point
+// alone could not prove it.
+TEST(Occlusion, ABoxSeenObliquelyIsJudgedBinByBin) {
+  ReturnDirections r;
+  r.add_scan(lattice_scan(0.2, -180, 180, -60, 90, box_room_walls), Eigen::Matrix3d::Identity(), 1);
+  const double leaf = 0.05;
+  // 0.15 m behind the wall x = 3, seen at 32-42° of incidence: every direction of the box
+  // meets that wall, whose depth grows by 0.3 m over the box's 9° of azimuth.
+  const Eigen::Vector3d lo(3.15, 2.0, 0.0), hi(3.95, 2.8, 0.8);
+  EXPECT_TRUE(r.may_see_box(lo, hi, leaf).none);
+  // The box's nearest distance, in the direction of its corner (3.15, 2.8, 0), lies in
+  // front of the wall.
+  const Eigen::Vector3d corner(lo.x(), hi.y(), lo.z());
+  const Eigen::Vector3d p = lo.norm() * corner.normalized();
+  EXPECT_TRUE(r.may_see(p.x(), p.y(), p.z(), leaf));
+  // In front of the same wall, 0.15 m from it: its farthest distance, in the direction
+  // of its corner (2.85, 0.5, 0), lies behind the wall.
+  const Eigen::Vector3d front_lo(2.05, 0.5, 0.0), front_hi(2.85, 1.3, 0.8);
+  EXPECT_TRUE(r.may_see_box(front_lo, front_hi, leaf).all);
+  const Eigen::Vector3d far_corner(front_hi.x(), front_lo.y(), front_lo.z());
+  const Eigen::Vector3d q = front_hi.norm() * far_corner.normalized();
+  EXPECT_FALSE(r.may_see(q.x(), q.y(), q.z(), leaf));
+}
+
 // add_scan with the depths' k expected (the survey passes the scan before's) reads the
 // returns once when the guess is right, twice when not: the directions and depths are the
 // same either way, on any number of threads.
