@@ -22,6 +22,7 @@
 #include "src/nbv/wall_shadows.h"
 #include "support/nbv_maps.h"
 #include "support/ray_reference.h"
+#include "support/sanitized.h"
 
 namespace semioctree {
 namespace {
@@ -375,7 +376,7 @@ struct FloorMap : Map {
 // What the shadows prove blocked is blocked, whatever the scanner's height within the
 // run of a wall, doors shut or open; and they prove much of what the walls hide.
 // (A sanitized run, several times slower, checks one floor from fewer positions.)
-const bool kSanitized = std::getenv("SEMIOCTREE_SANITIZED") != nullptr;
+const bool kSanitized = testing::sanitized();
 
 TEST(Nbv, WallShadowsProveOnlyBlockedLines) {
   for (unsigned seed : {1u, 2u}) {
