@@ -98,6 +98,10 @@ struct DirectionBins {
   // The centre elevation of row r (radians), and the centre azimuth fraction of its bin i.
   double row_elevation(int r) const { return ((r + 0.5) / per_degree - 90.0) * M_PI / 180.0; }
   double centre_fraction(int r, int i) const { return (i + 0.5) / count[r]; }
+  // The edges of the bins: row r spans the elevations [row_edge(r), row_edge(r + 1)]
+  // (radians), and its bin i the azimuths [column_edge(r, i), column_edge(r, i + 1)].
+  double row_edge(int r) const { return (double(r) / per_degree - 90.0) * (M_PI / 180.0); }
+  double column_edge(int r, int i) const { return -M_PI + (2 * M_PI / count[r]) * i; }
   // The centre direction of bin i of row r (unit length).
   Eigen::Vector3d centre(int r, int i) const {
     const double el = row_elevation(r), az = -M_PI + 2 * M_PI * centre_fraction(r, i);
@@ -523,16 +527,16 @@ ReturnDirections::BoxSight ReturnDirections::may_see_box(const Eigen::Vector3d& 
   if (all_before || all_behind) return {all_before, all_behind};
   all_before = all_behind = true;
   for_each_row_of(b, d, [&](int r, int i0, int i1) {
-    const double el0 = (double(r) / b.per_degree - 90.0) * (M_PI / 180.0);
-    const double el1 = (double(r + 1) / b.per_degree - 90.0) * (M_PI / 180.0);
+    const double el0 = b.row_edge(r), el1 = b.row_edge(r + 1);
     const double c0 = std::cos(el0), c1 = std::cos(el1);
     const Range cos_el{std::max(0.0, std::min(c0, c1) - kRangeMargin),
                        (el0 <= 0 && el1 >= 0 ? 1.0 : std::max(c0, c1)) + kRangeMargin};
     const Range uz{std::sin(el0) - kRangeMargin, std::sin(el1) + kRangeMargin};
     const int n = b.count[r];
-    // The azimuth −π + 2π·i/n of each column's first edge, stepped by a rotation.
+    // Each column's first edge, stepped from column to column by a rotation.
     const double step = 2 * M_PI / n, step_cos = std::cos(step), step_sin = std::sin(step);
-    double az_cos = std::cos(-M_PI + step * i0), az_sin = std::sin(-M_PI + step * i0);
+    const double first_edge = b.column_edge(r, i0);
+    double az_cos = std::cos(first_edge), az_sin = std::sin(first_edge);
     for (int i = i0; i <= i1; ++i) {
       const double next_cos = az_cos * step_cos - az_sin * step_sin;
       const double next_sin = az_sin * step_cos + az_cos * step_sin;
