@@ -22,6 +22,7 @@
 #include "support/cli_run.h"
 #include "support/sample_trees.h"
 #include "support/sanitized.h"
+#include "support/scratch.h"
 #include "support/synthetic_clouds.h"
 
 namespace semioctree {

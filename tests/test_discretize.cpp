@@ -13,6 +13,7 @@
 #include "semioctree/preprocess.h"
 #include "semioctree/slice_image.h"
 #include "support/sample_trees.h"
+#include "support/scratch.h"
 #include "support/synthetic_clouds.h"
 
 namespace semioctree {

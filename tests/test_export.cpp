@@ -14,6 +14,7 @@
 #include "semioctree/octomap_ext/export.h"
 #include "semioctree/octomap_ext/file_io.h"
 #include "support/sample_trees.h"
+#include "support/scratch.h"
 
 namespace semioctree {
 namespace {

@@ -8,6 +8,7 @@
 
 #include "semioctree/figures.h"
 #include "support/sample_trees.h"
+#include "support/scratch.h"
 
 namespace semioctree {
 namespace {

@@ -11,6 +11,7 @@
 #include "semioctree/octomap_ext/file_io.h"
 #include "semioctree/outputs.h"
 #include "support/sample_trees.h"
+#include "support/scratch.h"
 
 namespace semioctree {
 namespace {

@@ -16,6 +16,7 @@
 
 #include "semioctree/scan_io.h"
 #include "support/sample_trees.h"
+#include "support/scratch.h"
 
 namespace semioctree {
 namespace {

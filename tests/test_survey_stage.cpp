@@ -21,6 +21,7 @@
 #include "semioctree/survey.h"
 #include "support/sample_trees.h"
 #include "support/sanitized.h"
+#include "support/scratch.h"
 
 namespace semioctree {
 namespace {

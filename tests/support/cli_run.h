@@ -1,9 +1,7 @@
-// Running the built `semioctree` tool from a test, and a scratch directory of
-// the test process's own (ctest runs test cases as parallel processes).
+// Running the built `semioctree` tool from a test.
 #pragma once
 
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -11,21 +9,9 @@
 #include <sstream>
 #include <string>
 
-namespace semioctree::testing {
+#include "scratch.h"
 
-// Created on first use, removed when the process ends.
-inline const std::filesystem::path& scratch() {
-  static const struct Dir {
-    std::filesystem::path path =
-        std::filesystem::temp_directory_path() / ("semioctree_test_" + std::to_string(::getpid()));
-    Dir() { std::filesystem::create_directories(path); }
-    ~Dir() {
-      std::error_code ec;
-      std::filesystem::remove_all(path, ec);
-    }
-  } dir;
-  return dir.path;
-}
+namespace semioctree::testing {
 
 inline std::string slurp(const std::string& file) {
   std::ifstream in(file, std::ios::binary);

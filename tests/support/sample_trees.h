@@ -1,10 +1,7 @@
 // Small SemiOcTrees with every label, shared by the file and export tests.
 #pragma once
 
-#include <filesystem>
 #include <memory>
-#include <random>
-#include <string>
 
 #include "semioctree/octomap_ext/semioctree.h"
 
@@ -37,16 +34,6 @@ inline std::unique_ptr<SemiOcTree> sample_tree() {
   t.set_label(key(0.7, 0.5, 0.3), leaf, Label::kNbv);
   t.set_label(key(0.9, 0.5, 0.5), 1, Label::kUnknown);
   return tree;
-}
-
-// A fresh empty directory under the system temp dir.
-inline std::filesystem::path temp_dir(const std::string& name) {
-  std::random_device rd;
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("semioctree-test-" + name + "-" + std::to_string(rd()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
 }
 
 }  // namespace semioctree::testing
