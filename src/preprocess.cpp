@@ -27,10 +27,18 @@ bool finite(const pcl::PointXYZ& q) {
   return std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z);
 }
 
+// floor(t) for a finite t within ±2^62 (the cells of finite floats): std::floor is a call
+// into libm on the baseline x86-64 this builds for, once per axis of every point a
+// decimation or a count reads.
+std::int64_t floor_to_int(double t) {
+  const auto i = std::int64_t(t);  // towards zero
+  return i - std::int64_t(double(i) > t);
+}
+
 // The world-aligned cell of side 1 / inv holding q (finite), packed (decimate, count_cells and
 // the RANSAC's spread share it, so that a count is the count of what decimate keeps).
 std::uint64_t cell_key(const pcl::PointXYZ& q, double inv) {
-  auto part = [inv](float v) { return std::uint64_t(std::int64_t(std::floor(double(v) * inv))); };
+  auto part = [inv](float v) { return std::uint64_t(floor_to_int(double(v) * inv)); };
   return pack_cell_parts(part(q.x), part(q.y), part(q.z));
 }
 
@@ -303,9 +311,19 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
       ++read;
       return cells.size() <= cap;
     };
+    // A cell met a moment before is in the table already: it goes in as no cell, so the
+    // table fills at the same point it would have, and `read` is unchanged.
+    RecentKeys<std::uint8_t> recent;
     bool more = true;
     each_point([&](const pcl::PointXYZ& q) {
-      return more = batch.add(finite(q) ? cell_key(q, inv) : BatchedInsert::kNone, counted);
+      std::uint64_t k = finite(q) ? cell_key(q, inv) : BatchedInsert::kNone;
+      if (k != BatchedInsert::kNone) {
+        if (recent.find(k))
+          k = BatchedInsert::kNone;
+        else
+          recent.remember(k, 0);
+      }
+      return more = batch.add(k, counted);
     });
     if (more) batch.flush(counted);
     if (cells.size() <= cap) return cells.size();
@@ -317,10 +335,13 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
   for (std::uint64_t part = 0; part < parts; ++part) {
     PackedKeyMap<std::uint8_t> cells(cap);
     BatchedInsert batch(cells);
+    RecentKeys<std::uint8_t> recent;
     each_point([&](const pcl::PointXYZ& q) {
       if (!finite(q)) return true;
       const std::uint64_t k = cell_key(q, inv);
-      return (k * 0x9E3779B97F4A7C15ull >> 32) % parts != part || batch.add(k, go_on);
+      if ((k * 0x9E3779B97F4A7C15ull >> 32) % parts != part || recent.find(k)) return true;
+      recent.remember(k, 0);
+      return batch.add(k, go_on);
     });
     batch.flush(go_on);
     count += cells.size();
@@ -355,19 +376,30 @@ void CellThinning::add(const pcl::PointXYZ& q) {
   auto centre_offset2 = [&](const pcl::PointXYZ& p) {
     auto d = [&](float v) {
       const double t = double(v) * inv_;
-      return t - std::floor(t) - 0.5;
+      return t - double(floor_to_int(t)) - 0.5;
     };
     return float(d(p.x) * d(p.x) + d(p.y) * d(p.y) + d(p.z) * d(p.z));
   };
+  // A cell's index never changes once given, so recent_ may answer for slot_.
   Cloud& kept = *kept_;
-  const auto [index, added] = slot_.try_emplace(cell_key(q, inv_), std::uint32_t(kept.size()));
+  const std::uint64_t key = cell_key(q, inv_);
   const float o2 = centre_offset2(q);
-  if (added) {
-    kept.push_back(q);
-    offset2_.push_back(o2);
-  } else if (o2 < offset2_[*index]) {
-    kept[*index] = q;
-    offset2_[*index] = o2;
+  std::uint32_t index;
+  if (const std::uint32_t* known = recent_.find(key)) {
+    index = *known;
+  } else {
+    const auto [slot, added] = slot_.try_emplace(key, std::uint32_t(kept.size()));
+    index = *slot;
+    recent_.remember(key, index);
+    if (added) {
+      kept.push_back(q);
+      offset2_.push_back(o2);
+      return;
+    }
+  }
+  if (o2 < offset2_[index]) {
+    kept[index] = q;
+    offset2_[index] = o2;
   }
 }
 
@@ -381,6 +413,7 @@ Cloud::Ptr CellThinning::release() {
   kept_.reset(new Cloud);
   kept_->is_dense = true;
   slot_.clear();
+  recent_.forget_all();
   offset2_ = {};
   return out;
 }

@@ -76,5 +76,37 @@ TEST(PackedKeyMap, FindingAnExistingKeyDoesNotMoveValues) {
   EXPECT_EQ(map.capacity(), capacity);
 }
 
+// RecentKeys answers with the value last remembered with a key while no other key has
+// taken its slot, and never for a key it was not given: so a loop that remembers what its
+// table holds may ask it first. Checked against the keys and values last remembered.
+TEST(RecentKeys, AnswersOnlyForKeysRememberedWithTheirLastValue) {
+  RecentKeys<std::uint32_t, 6> recent;                    // 64 slots: many keys share one
+  std::unordered_map<std::uint64_t, std::uint32_t> last;  // key → value last remembered
+  std::mt19937_64 rng(11);
+  std::uniform_int_distribution<std::uint64_t> cell(0, 300);
+  std::size_t answered = 0, forgotten = 0;
+  for (std::uint32_t i = 0; i < 100000; ++i) {
+    const std::uint64_t key = cell(rng) * 0x100000001ull;
+    if (const std::uint32_t* v = recent.find(key)) {
+      ++answered;
+      const auto it = last.find(key);
+      ASSERT_NE(it, last.end()) << key;  // never an answer for a key not given
+      ASSERT_EQ(*v, it->second) << key;  // the value given last
+    } else {
+      forgotten += last.count(key);  // given once, its slot since taken by another key
+    }
+    if (rng() % 3 == 0) {
+      recent.remember(key, i);
+      last[key] = i;
+      ASSERT_NE(recent.find(key), nullptr);
+      ASSERT_EQ(*recent.find(key), i);
+    }
+  }
+  EXPECT_GT(answered, 1000u);
+  EXPECT_GT(forgotten, 1000u);  // 301 keys in 64 slots: most answers are forgotten
+  recent.forget_all();
+  for (const auto& kv : last) EXPECT_EQ(recent.find(kv.first), nullptr);
+}
+
 }  // namespace
 }  // namespace semioctree

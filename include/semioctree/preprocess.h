@@ -93,7 +93,8 @@ Cloud::Ptr decimate(const Cloud& cloud, double spacing);
 
 // decimate, a cloud at a time: after add(a), add(b), ... cloud() is decimate(a + b + ...)
 // (the same points in the same order), each add costing its own points only. Keeps the
-// cells' table (12 bytes a slot, a slot or two a point kept).
+// cells' table (12 bytes a slot, a slot or two a point kept) and, in front of it, the
+// last 4 096 cells met (48 KB).
 class CellThinning {
  public:
   explicit CellThinning(double spacing);       // spacing > 0, else std::invalid_argument
@@ -110,6 +111,7 @@ class CellThinning {
  private:
   double inv_;
   PackedKeyMap<std::uint32_t> slot_;  // cell → index of its point in kept_
+  RecentKeys<std::uint32_t> recent_;  // the cells of the last points, in front of slot_
   std::vector<float> offset2_;        // per kept point: squared distance from its cell's centre
   Cloud::Ptr kept_;
 };

@@ -130,4 +130,36 @@ class PackedKeyMap {
   std::size_t size_ = 0;
 };
 
+// A direct-mapped cache in front of a PackedKeyMap: in each of 2^kBits slots, the last
+// key remembered there and its value. Loops over a scan's points, which come in sweep
+// order and mostly fall into a cell met a few points before, ask it first and probe the
+// table (many megabytes, past the processor's caches) only when it does not know the key.
+// It answers for keys remembered, never for others, so a loop that remembers only what
+// its table holds gets the table's answers.
+template <class Value, unsigned kBits = 12>
+class RecentKeys {
+ public:
+  RecentKeys() : keys_(kSlots, kNoKey), values_(kSlots) {}
+  // The value remembered with `key` (not kNoKey) if its slot still holds it, else null.
+  const Value* find(std::uint64_t key) const {
+    const std::size_t i = slot_of(key);
+    return keys_[i] == key ? &values_[i] : nullptr;
+  }
+  void remember(std::uint64_t key, const Value& value) {
+    const std::size_t i = slot_of(key);
+    keys_[i] = key;
+    values_[i] = value;
+  }
+  void forget_all() { keys_.assign(kSlots, kNoKey); }
+
+ private:
+  static constexpr std::uint64_t kNoKey = ~std::uint64_t(0);
+  static constexpr std::size_t kSlots = std::size_t(1) << kBits;
+  static std::size_t slot_of(std::uint64_t key) {
+    return std::size_t((key * 0x9E3779B97F4A7C15ull) >> (64 - kBits));
+  }
+  std::vector<std::uint64_t> keys_;
+  std::vector<Value> values_;
+};
+
 }  // namespace semioctree
