@@ -16,6 +16,7 @@
 #include <sstream>
 #include <vector>
 
+#include "parallel_for.h"
 #include "random_subset.h"
 #include "semioctree/octomap_ext/packed_key_map.h"
 
@@ -293,50 +294,76 @@ class BatchedInsert {
   std::size_t n_ = 0;
 };
 
-// count_cells over the points `each_point` streams: each_point(f) calls f(q) for each
-// point in order and stops when f returns false; `size` is their number.
+// Fewer points than this a thread are not worth starting one for.
+constexpr std::size_t kMinThreadShare = std::size_t(1) << 16;
+
+// count_cells over the points `each_point` streams: each_point(begin, end, f) calls
+// f(i, q) for each point q, at position i, of the positions [begin, end) of `size`, in
+// order, and stops when f returns false. Contiguous shares of the positions are counted on
+// `threads` workers, each into a table of its own, and the tables merged: the count is exact
+// whatever the threads.
 template <class EachPoint>
 std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double spacing,
-                           std::size_t cap) {
-  // One table of at most cap + 1 keys first; past that, the parts are as many as keep
-  // each table near the cap, from the share of the points read when the first one filled
-  // (a scan's points sweep its surfaces in order).
+                           std::size_t cap, unsigned threads) {
+  // One table of at most cap + 1 keys a worker first; past that (in a table or in their
+  // union), the parts are as many as keep each table near the cap, from the share of the
+  // points read when a table filled (a scan's points sweep its surfaces in order).
   cap = std::max<std::size_t>(cap, 1);
   const double inv = 1.0 / spacing;
-  std::size_t read = 0;
+  const std::size_t workers =
+      std::max<std::size_t>(1, std::min<std::size_t>(threads, size / kMinThreadShare));
+  double estimate = 0;  // cells in all, extrapolated from the tables' fill
   {
-    PackedKeyMap<std::uint8_t> cells(std::min(size, cap + 1));
-    BatchedInsert batch(cells);
-    auto counted = [&](std::uint64_t) {
-      ++read;
-      return cells.size() <= cap;
-    };
-    // A cell met a moment before is in the table already: it goes in as no cell, so the
-    // table fills at the same point it would have, and `read` is unchanged.
-    RecentKeys<std::uint8_t> recent;
-    bool more = true;
-    each_point([&](const pcl::PointXYZ& q) {
-      std::uint64_t k = finite(q) ? cell_key(q, inv) : BatchedInsert::kNone;
-      if (k != BatchedInsert::kNone) {
-        if (recent.find(k))
-          k = BatchedInsert::kNone;
-        else
-          recent.remember(k, 0);
-      }
-      return more = batch.add(k, counted);
+    std::vector<PackedKeyMap<std::uint8_t>> cells(workers);
+    std::vector<double> share_read(workers, 1.0);  // of the worker's positions, when it stopped
+    detail::parallel_for(workers, unsigned(workers), 1, [&](std::size_t w, unsigned) {
+      const std::size_t begin = size * w / workers, end = size * (w + 1) / workers;
+      PackedKeyMap<std::uint8_t>& table = cells[w];
+      table.reserve(std::min(end - begin, cap + 1));
+      BatchedInsert batch(table);
+      // A cell met a moment before is in the table already: it goes in as no cell, so
+      // the table fills at the same point it would have.
+      RecentKeys<std::uint8_t> recent;
+      auto counted = [&](std::uint64_t) { return table.size() <= cap; };
+      std::size_t last = begin;  // the position of the last point queued
+      bool more = true;
+      each_point(begin, end, [&](std::size_t i, const pcl::PointXYZ& q) {
+        last = i;
+        std::uint64_t k = finite(q) ? cell_key(q, inv) : BatchedInsert::kNone;
+        if (k != BatchedInsert::kNone) {
+          if (recent.find(k))
+            k = BatchedInsert::kNone;
+          else
+            recent.remember(k, 0);
+        }
+        return more = batch.add(k, counted);
+      });
+      if (more) batch.flush(counted);
+      if (!more) share_read[w] = double(last + 1 - begin) / double(end - begin);
     });
-    if (more) batch.flush(counted);
-    if (cells.size() <= cap) return cells.size();
+    bool over = false;
+    for (std::size_t w = 0; w < workers; ++w) {
+      over = over || cells[w].size() > cap;
+      estimate += double(cells[w].size()) / std::max(share_read[w], 1e-9);
+    }
+    for (std::size_t w = 1; w < workers && !over; ++w) {
+      cells[w].for_each_key([&](std::uint64_t k) {
+        cells[0].insert(k);
+        return !(over = cells[0].size() > cap);
+      });
+      cells[w].clear();
+    }
+    if (!over) return cells[0].size();
   }
-  const double estimate = double(cap) * double(size) / double(read);
-  const std::uint64_t parts = std::uint64_t(std::ceil(1.25 * estimate / double(cap)));
-  std::size_t count = 0;
+  const std::uint64_t parts =
+      std::max<std::uint64_t>(2, std::uint64_t(std::ceil(1.25 * estimate / double(cap))));
+  std::vector<std::size_t> counts(parts);
   auto go_on = [](std::uint64_t) { return true; };
-  for (std::uint64_t part = 0; part < parts; ++part) {
+  detail::parallel_for(parts, unsigned(workers), 1, [&](std::size_t part, unsigned) {
     PackedKeyMap<std::uint8_t> cells(cap);
     BatchedInsert batch(cells);
     RecentKeys<std::uint8_t> recent;
-    each_point([&](const pcl::PointXYZ& q) {
+    each_point(0, size, [&](std::size_t, const pcl::PointXYZ& q) {
       if (!finite(q)) return true;
       const std::uint64_t k = cell_key(q, inv);
       if ((k * 0x9E3779B97F4A7C15ull >> 32) % parts != part || recent.find(k)) return true;
@@ -344,23 +371,24 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
       return batch.add(k, go_on);
     });
     batch.flush(go_on);
-    count += cells.size();
-  }
-  return count;
+    counts[part] = cells.size();
+  });
+  return std::accumulate(counts.begin(), counts.end(), std::size_t(0));
 }
 
-// The points of `cloud`, in order, for count_cells_of.
+// The points of `cloud` at positions [begin, end), in order, for count_cells_of.
 auto points_of(const Cloud& cloud) {
-  return [&cloud](auto&& f) {
-    for (const pcl::PointXYZ& q : cloud)
-      if (!f(q)) return;
+  return [&cloud](std::size_t begin, std::size_t end, auto&& f) {
+    for (std::size_t i = begin; i < end; ++i)
+      if (!f(i, cloud[i])) return;
   };
 }
 
 }  // namespace
 
-std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap) {
-  return count_cells_of(cloud.size(), points_of(cloud), spacing, cap);
+std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap, unsigned threads) {
+  return count_cells_of(cloud.size(), points_of(cloud), spacing, cap,
+                        detail::thread_count(threads));
 }
 
 CellThinning::CellThinning(double spacing) : inv_(1.0 / spacing), kept_(new Cloud) {
@@ -471,6 +499,7 @@ FloorAndCeiling choose_floor_and_ceiling(const std::vector<HorizontalPlane>& pla
 }  // namespace
 
 PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
+  const unsigned threads = detail::thread_count(p.threads);
   PreprocessResult r;
   r.input_points = input.size();
   if (input.size() < p.min_points) {
@@ -558,13 +587,18 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   // a few times, levelling each point again, and keeps only what it decimates to (a scan
   // of 5.4 M points would hold another 4.5 M beside it: docs/data-flow.md, "Memory").
   const std::size_t after_cut = input.size() - r.floor.removed - r.ceiling.removed;
-  auto each_cut = [&](auto&& f) {
-    for (std::size_t i = 0; i < input.size(); ++i) {
+  // each_cut_in(begin, end, f): f(i, v) for the cut cloud's points among the input's
+  // [begin, end), in order, until f returns false; each_cut(f): f(v) for all of them.
+  auto each_cut_in = [&](std::size_t begin, std::size_t end, auto&& f) {
+    for (std::size_t i = begin; i < end; ++i) {
       if (in_band[i]) continue;
       pcl::PointXYZ v = levelled(i);
       v.z = float(double(v.z) + dz);
-      if (!f(v)) return;
+      if (!f(i, v)) return;
     }
+  };
+  auto each_cut = [&](auto&& f) {
+    each_cut_in(0, input.size(), [&](std::size_t, const pcl::PointXYZ& v) { return f(v); });
   };
   // The room's height: given, the ceiling's, or the top of the points left.
   if (p.ceiling_height > 0) {
@@ -610,7 +644,9 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     std::size_t slots = 64;
     while (CellTable::keys_held_in(2 * slots) <= 2 * p.target_points) slots *= 2;
     const std::size_t cap = CellTable::keys_held_in(slots) - 1;
-    auto count_cut = [&](double s) { return double(count_cells_of(after_cut, each_cut, s, cap)); };
+    auto count_cut = [&](double s) {
+      return double(count_cells_of(input.size(), each_cut_in, s, cap, threads));
+    };
     double s0 = std::max(spacing, 0.01), c0 = count_cut(s0);
     double s1 = std::max(spacing, s0 * std::sqrt(c0 / goal));
     // The finest spacing tried that keeps at most the target: on regular
@@ -633,12 +669,21 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     spacing = best;
   }
   if (spacing > 0) {
-    CellThinning thinning(spacing);
-    each_cut([&](const pcl::PointXYZ& v) {
-      thinning.add(v);
-      return true;
+    // Contiguous shares of the input thinned apart, then in order into the first:
+    // CellThinning keeps what decimating their union keeps, whatever the threads.
+    const std::size_t shares =
+        std::max<std::size_t>(1, std::min<std::size_t>(threads, input.size() / kMinThreadShare));
+    std::vector<CellThinning> thinned;
+    for (std::size_t k = 0; k < shares; ++k) thinned.emplace_back(spacing);
+    detail::parallel_for(shares, unsigned(shares), 1, [&](std::size_t k, unsigned) {
+      each_cut_in(input.size() * k / shares, input.size() * (k + 1) / shares,
+                  [&](std::size_t, const pcl::PointXYZ& v) {
+                    thinned[k].add(v);
+                    return true;
+                  });
     });
-    r.cloud = thinning.release();
+    for (std::size_t k = 1; k < shares; ++k) thinned[0].add(*thinned[k].release());
+    r.cloud = thinned[0].release();
   } else {
     Cloud::Ptr cut(new Cloud);
     cut->reserve(after_cut);

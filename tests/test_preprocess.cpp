@@ -148,11 +148,36 @@ TEST(Preprocess, CountsCellsExactlyWithTablesOfBoundedSize) {
   ASSERT_GT(room->size(), 100000u);
   for (double spacing : {0.01, 0.03, 0.2}) {
     const std::size_t truth = distinct_cells(*room, spacing);
-    // A table for all of them, and tables of a tenth and a fiftieth of the count
-    // (counted in about 13 and 63 parts).
-    EXPECT_EQ(count_cells(*room, spacing, room->size()), truth) << spacing;
-    EXPECT_EQ(count_cells(*room, spacing, truth / 10), truth) << spacing;
-    EXPECT_EQ(count_cells(*room, spacing, truth / 50), truth) << spacing;
+    // A table for all of them; tables of 7/10 of the count (on 2 or 3 threads each
+    // share's table holds its cells, and their union overflows while they merge); and
+    // tables of a tenth and a fiftieth (counted in about 13 and 63 parts).
+    for (unsigned threads : {1u, 2u, 3u}) {
+      EXPECT_EQ(count_cells(*room, spacing, room->size(), threads), truth) << spacing;
+      EXPECT_EQ(count_cells(*room, spacing, truth * 7 / 10, threads), truth) << spacing;
+      EXPECT_EQ(count_cells(*room, spacing, truth / 10, threads), truth) << spacing;
+      EXPECT_EQ(count_cells(*room, spacing, truth / 50, threads), truth) << spacing;
+    }
+  }
+}
+
+// The counts and the thinning run on shares of the scan: the spacing found and the
+// points kept, in their order, are the same on any number of threads.
+TEST(Preprocess, KeepsTheSamePointsOnAnyThreads) {
+  auto room = testing::synthetic_room(8, 6, 3, 0.01, 0.002);
+  PreprocessParams p;
+  p.target_points = 50000;
+  p.threads = 1;
+  const PreprocessResult one = preprocess(*room, p);
+  ASSERT_GT(one.after_cut, 4 * 65536u);  // shares of at least 65 536 points on 3 threads
+  for (unsigned threads : {2u, 3u}) {
+    p.threads = threads;
+    const PreprocessResult r = preprocess(*room, p);
+    EXPECT_EQ(r.decimation_spacing, one.decimation_spacing) << threads;
+    ASSERT_EQ(r.cloud->size(), one.cloud->size()) << threads;
+    for (std::size_t i = 0; i < r.cloud->size(); ++i) {
+      const auto &a = (*r.cloud)[i], &b = (*one.cloud)[i];
+      ASSERT_TRUE(a.x == b.x && a.y == b.y && a.z == b.z) << threads << " " << i;
+    }
   }
 }
 

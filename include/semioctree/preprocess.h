@@ -42,6 +42,9 @@ struct PreprocessParams {
   double top_quantile = 0.999;
   // > 0: the room's height above the floor, m, given (a ceiling found is still cut).
   double ceiling_height = 0;
+  // Workers for the decimation's counts and thinning (0: one per core); the result does
+  // not depend on it.
+  unsigned threads = 0;
 };
 
 // Where PreprocessResult::ceiling_height comes from.
@@ -119,6 +122,8 @@ class CellThinning {
 // `cloud`, exactly, with tables of about `cap` keys at most: beyond that (a spacing much
 // finer than the points' on a scan of millions) the keys are split by their hash and
 // counted part by part, one pass over the points a part. Non-finite points are skipped.
-std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap);
+// Contiguous shares of the cloud are counted on `threads` workers (0: one per core), a
+// table of up to `cap` keys each, and their tables merged.
+std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap, unsigned threads = 1);
 
 }  // namespace semioctree

@@ -94,6 +94,7 @@ void apply_planning_options(const PlanningOptions& o, SurveyParams& p, bool homo
                            : DiscretizeParams{o.leaf, o.coarse, 0.0};
   p.map.threads = o.threads;
   p.registration.threads = o.threads;
+  p.preprocess.threads = o.threads;
   p.map.exact_octants = o.octants == "exact";
   p.preprocess.target_points = o.target_points;
   p.preprocess.ceiling_height = o.ceiling;

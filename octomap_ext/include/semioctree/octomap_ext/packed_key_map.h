@@ -107,6 +107,12 @@ class PackedKeyMap {
   }
   std::size_t size() const { return size_; }
   std::size_t capacity() const { return keys_.size(); }  // slots
+  // Calls f(key) for every key, in slot order, until f returns false.
+  template <class F>
+  void for_each_key(const F& f) const {
+    for (const std::uint64_t key : keys_)
+      if (key != kNoKey && !f(key)) return;
+  }
   std::size_t memory_bytes() const {
     return keys_.capacity() * sizeof(std::uint64_t) + values_.capacity() * sizeof(Value);
   }
