@@ -18,9 +18,12 @@ struct PreprocessedLab {
   std::size_t scan_points = 0;  // before preprocessing
   PreprocessResult pre;
   Point3 origin;  // the scanner's optical centre, levelled frame
+  // With `with_returns`: where the scan got returns, and its depths, as a survey's view of
+  // it holds them (the lab scanner's limits; open above if no ceiling was found).
+  std::shared_ptr<const ReturnDirections> returns;
 };
 
-inline PreprocessedLab preprocessed_lab() {
+inline PreprocessedLab preprocessed_lab(bool with_returns = false) {
   const LabScan lab = scan_lab();
   PreprocessParams pp;
   pp.target_points = 400000;
@@ -29,6 +32,22 @@ inline PreprocessedLab preprocessed_lab() {
   out.pre = preprocess(lab.world, pp);
   const Eigen::Vector3d o = out.pre.transform * lab.origin;
   out.origin = Point3(o.x(), o.y(), o.z());
+  if (with_returns) {
+    const sim::Scene scene =
+        sim::load_scene(std::string(SEMIOCTREE_SOURCE_DIR) + "/sim/scenes/lab.scene.json");
+    ScannerView limits;
+    limits.min_range = scene.scanner.min_range;
+    limits.max_range = scene.scanner.max_range;
+    limits.elevation_min_deg = scene.scanner.elevation_min_deg;
+    limits.elevation_max_deg = scene.scanner.elevation_max_deg;
+    Cloud seen;  // the returns from the optical centre, world axes
+    seen.reserve(lab.world.size());
+    for (const auto& p : lab.world)
+      seen.push_back(pcl::PointXYZ{float(p.x - lab.origin.x()), float(p.y - lab.origin.y()),
+                                   float(p.z - lab.origin.z())});
+    out.returns = return_directions(seen, out.pre.transform.linear(),
+                                    returns_options(limits, !out.pre.ceiling_found));
+  }
   return out;
 }
 
