@@ -633,8 +633,8 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     // The spacing that leaves about the target: count the cells of a trial spacing (the
     // partition decimate keeps one point of) with a fast hash set, and update the spacing
     // by the secant of log(count) over log(spacing) (≈ −2 for surfaces). Aim 1 % under
-    // the target; accept 3 % under to exactly at it, after at most kMaxCounts counts
-    // (docs/data-flow.md, "Decimation").
+    // the target; accept 3 % under to exactly at it, after at most kMaxCounts counts or
+    // once the counts contradict each other (docs/data-flow.md, "Decimation").
     constexpr int kMaxCounts = 13;
     const double goal = 0.99 * double(p.target_points);
     const double target = double(p.target_points);
@@ -645,7 +645,9 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     while (CellTable::keys_held_in(2 * slots) <= 2 * p.target_points) slots *= 2;
     const std::size_t cap = CellTable::keys_held_in(slots) - 1;
     auto count_cut = [&](double s) {
-      return double(count_cells_of(input.size(), each_cut_in, s, cap, threads));
+      const std::size_t n = count_cells_of(input.size(), each_cut_in, s, cap, threads);
+      r.spacing_counts.emplace_back(s, n);
+      return double(n);
     };
     double s0 = std::max(spacing, 0.01), c0 = count_cut(s0);
     double s1 = std::max(spacing, s0 * std::sqrt(c0 / goal));
@@ -653,10 +655,19 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     // (synthetic) grids the count jumps with the cells' phase and the secant
     // may not settle, so the result is always a spacing that was counted.
     double best = c0 <= target ? s0 : 0, best_count = c0 <= target ? c0 : 0;
+    // The coarsest spacing counted over the target and the finest counted within it. A
+    // finer spacing within it than one over it is a count no longer monotone in the
+    // spacing: the cells' phase, not the spacing, decides it there, and further counts
+    // only sample that noise, so the best so far is taken.
+    double coarsest_over = c0 > target ? s0 : 0;
+    double finest_within = c0 <= target ? s0 : std::numeric_limits<double>::infinity();
     for (int counts = 1; counts < kMaxCounts; ++counts) {
       const double c1 = count_cut(s1);
       if (c1 <= target && c1 > best_count) best = s1, best_count = c1;
       if (c1 <= target && c1 >= 0.97 * target) break;
+      (c1 > target ? coarsest_over : finest_within) =
+          c1 > target ? std::max(coarsest_over, s1) : std::min(finest_within, s1);
+      if (best > 0 && finest_within < coarsest_over) break;
       double slope = (std::log(c1) - std::log(c0)) / (std::log(s1) - std::log(s0));
       if (!std::isfinite(slope) || slope > -0.5) slope = -2.0;  // flat or noisy: surfaces
       s0 = s1;

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "semioctree/octomap_ext/packed_key_map.h"
@@ -76,6 +77,8 @@ struct PreprocessResult {
   std::size_t after_cut = 0;      // after removing floor and ceiling points
   std::size_t output_points = 0;  // after decimation
   double decimation_spacing = 0;  // spacing actually used (0: none)
+  // The spacings the search for target_points counted, in order, with their cells.
+  std::vector<std::pair<double, std::size_t>> spacing_counts;
 };
 
 class PreprocessError : public std::runtime_error {
