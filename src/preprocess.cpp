@@ -665,8 +665,10 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
       const double c1 = count_cut(s1);
       if (c1 <= target && c1 > best_count) best = s1, best_count = c1;
       if (c1 <= target && c1 >= 0.97 * target) break;
-      (c1 > target ? coarsest_over : finest_within) =
-          c1 > target ? std::max(coarsest_over, s1) : std::min(finest_within, s1);
+      if (c1 > target)
+        coarsest_over = std::max(coarsest_over, s1);
+      else
+        finest_within = std::min(finest_within, s1);
       if (best > 0 && finest_within < coarsest_over) break;
       double slope = (std::log(c1) - std::log(c0)) / (std::log(s1) - std::log(s0));
       if (!std::isfinite(slope) || slope > -0.5) slope = -2.0;  // flat or noisy: surfaces
