@@ -265,24 +265,22 @@ std::optional<double> top_of_heights(std::vector<float> z, double q) {
 // the misses of a batch then overlap. The keys go in in the order given.
 class BatchedInsert {
  public:
-  static constexpr std::uint64_t kNone = PackedKeyMap<std::uint8_t>::kNoKey;  // no cell
   explicit BatchedInsert(PackedKeyMap<std::uint8_t>& cells) : cells_(cells) {}
-  // Queues `key` (kNone: a point that counts as read but has no cell);
-  // `inserted(key)` is called as each one goes in, in order, and returns false to stop.
-  template <class Inserted>
-  bool add(std::uint64_t key, const Inserted& inserted) {
+  // Queues `key`; `go_on()` is asked after each key goes in, in order, and returns false
+  // to stop (add and flush then return false).
+  template <class GoOn>
+  bool add(std::uint64_t key, const GoOn& go_on) {
     keys_[n_++] = key;
-    return n_ < kBatch || flush(inserted);
+    return n_ < kBatch || flush(go_on);
   }
-  template <class Inserted>
-  bool flush(const Inserted& inserted) {
-    for (std::size_t j = 0; j < n_; ++j)
-      if (keys_[j] != kNone) cells_.prefetch(keys_[j]);
+  template <class GoOn>
+  bool flush(const GoOn& go_on) {
+    for (std::size_t j = 0; j < n_; ++j) cells_.prefetch(keys_[j]);
     const std::size_t n = n_;
     n_ = 0;
     for (std::size_t j = 0; j < n; ++j) {
-      if (keys_[j] != kNone) cells_.insert(keys_[j]);
-      if (!inserted(keys_[j])) return false;
+      cells_.insert(keys_[j]);
+      if (!go_on()) return false;
     }
     return true;
   }
@@ -293,6 +291,14 @@ class BatchedInsert {
   std::uint64_t keys_[kBatch];
   std::size_t n_ = 0;
 };
+
+// Whether `key` is new to `recent`, which then remembers it: a cell met a moment before is
+// in the count's table already.
+bool first_met(RecentKeys<std::uint8_t>& recent, std::uint64_t key) {
+  if (recent.find(key)) return false;
+  recent.remember(key, 0);
+  return true;
+}
 
 // Fewer points than this a thread are not worth starting one for.
 constexpr std::size_t kMinThreadShare = std::size_t(1) << 16;
@@ -321,22 +327,15 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
       PackedKeyMap<std::uint8_t>& table = cells[w];
       table.reserve(std::min(end - begin, cap + 1));
       BatchedInsert batch(table);
-      // A cell met a moment before is in the table already: it goes in as no cell, so
-      // the table fills at the same point it would have.
       RecentKeys<std::uint8_t> recent;
-      auto counted = [&](std::uint64_t) { return table.size() <= cap; };
-      std::size_t last = begin;  // the position of the last point queued
+      auto counted = [&] { return table.size() <= cap; };
+      std::size_t last = begin;  // the position of the last point read
       bool more = true;
       each_point(begin, end, [&](std::size_t i, const pcl::PointXYZ& q) {
         last = i;
-        std::uint64_t k = finite(q) ? cell_key(q, inv) : BatchedInsert::kNone;
-        if (k != BatchedInsert::kNone) {
-          if (recent.find(k))
-            k = BatchedInsert::kNone;
-          else
-            recent.remember(k, 0);
-        }
-        return more = batch.add(k, counted);
+        if (!finite(q)) return true;
+        const std::uint64_t k = cell_key(q, inv);
+        return !first_met(recent, k) || (more = batch.add(k, counted));
       });
       if (more) batch.flush(counted);
       if (!more) share_read[w] = double(last + 1 - begin) / double(end - begin);
@@ -358,7 +357,7 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
   const std::uint64_t parts =
       std::max<std::uint64_t>(2, std::uint64_t(std::ceil(1.25 * estimate / double(cap))));
   std::vector<std::size_t> counts(parts);
-  auto go_on = [](std::uint64_t) { return true; };
+  auto go_on = [] { return true; };
   detail::parallel_for(parts, unsigned(workers), 1, [&](std::size_t part, unsigned) {
     PackedKeyMap<std::uint8_t> cells(cap);
     BatchedInsert batch(cells);
@@ -366,9 +365,8 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
     each_point(0, size, [&](std::size_t, const pcl::PointXYZ& q) {
       if (!finite(q)) return true;
       const std::uint64_t k = cell_key(q, inv);
-      if ((k * 0x9E3779B97F4A7C15ull >> 32) % parts != part || recent.find(k)) return true;
-      recent.remember(k, 0);
-      return batch.add(k, go_on);
+      return (k * 0x9E3779B97F4A7C15ull >> 32) % parts != part || !first_met(recent, k) ||
+             batch.add(k, go_on);
     });
     batch.flush(go_on);
     counts[part] = cells.size();

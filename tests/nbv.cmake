@@ -14,7 +14,7 @@ target_include_directories(test_nbv PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
 if(TARGET semioctree_sim)
   target_link_libraries(test_nbv PRIVATE semioctree_sim)
   target_compile_definitions(test_nbv PRIVATE SEMIOCTREE_HAVE_SIM=1)
-  semioctree_add_bench(bench_nbv SOURCES bench_nbv.cpp LIBS semioctree semioctree_sim)
+  semioctree_add_bench(bench_nbv SOURCES bench_nbv.cpp LIBS semioctree_sim_platform)
 endif()
 # map-nbv on maps built as OctoMap users build them (sparse scans of generated and built-in
 # scenes along a path, insertPointCloud, the floor shifted), judged against the scenes.

@@ -6,7 +6,7 @@ foreach(t test_semioctree test_traversal test_file_io test_export test_packed_ke
 endforeach()
 # Its default map is the classified lab, scanned with the synthetic scanner.
 if(TARGET semioctree_sim)
-  semioctree_add_bench(bench_traversal SOURCES bench_traversal.cpp LIBS semioctree semioctree_sim)
+  semioctree_add_bench(bench_traversal SOURCES bench_traversal.cpp LIBS semioctree_sim_platform)
 endif()
 
 # The command-line tool (runs the built binary).

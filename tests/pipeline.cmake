@@ -23,7 +23,7 @@ if(TARGET semioctree_sim)
   target_include_directories(test_lab_discretization PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
 endif()
 if(TARGET semioctree_sim)
-  semioctree_add_bench(bench_occlusion SOURCES bench_occlusion.cpp LIBS semioctree semioctree_sim)
+  semioctree_add_bench(bench_occlusion SOURCES bench_occlusion.cpp LIBS semioctree_sim_platform)
 endif()
 # The dense-array homogeneous grid, a baseline of the benchmarks (support/dense_grid.h; it
 # shares the worker pool and the scanner's limits of src/).

@@ -27,11 +27,17 @@ sim::Scan scan_at(const SimulatedPlatform& p, const sim::Pose2& pose, std::uint6
 
 }  // namespace
 
+ScannerView scanner_limits(const sim::Scene& scene) {
+  ScannerView limits;
+  limits.min_range = scene.scanner.min_range;
+  limits.max_range = scene.scanner.max_range;
+  limits.elevation_min_deg = scene.scanner.elevation_min_deg;
+  limits.elevation_max_deg = scene.scanner.elevation_max_deg;
+  return limits;
+}
+
 void apply_scene(const sim::Scene& scene, SurveyParams& params) {
-  params.map.limits.min_range = scene.scanner.min_range;
-  params.map.limits.max_range = scene.scanner.max_range;
-  params.map.limits.elevation_min_deg = scene.scanner.elevation_min_deg;
-  params.map.limits.elevation_max_deg = scene.scanner.elevation_max_deg;
+  params.map.limits = scanner_limits(scene);
   params.nbv.limits = params.map.limits;
   params.robot.radius = scene.robot.radius;
   params.robot.scanner_height = scene.scanner.height;

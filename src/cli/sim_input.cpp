@@ -10,6 +10,7 @@
 #include "semioctree/sim/raycaster.h"
 #include "semioctree/sim/scanner.h"
 #include "semioctree/sim/scene.h"
+#include "semioctree/sim_platform/simulated_platform.h"
 #include "semioctree/timing.h"
 
 namespace semioctree::cli {
@@ -47,13 +48,9 @@ PreparedCloud scan_scene_at_start(const std::string& scene_path, std::uint64_t s
   for (const auto& p : cloud)
     seen.push_back(pcl::PointXYZ{float(p.x - s.origin().x()), float(p.y - s.origin().y()),
                                  float(p.z - s.origin().z())});
-  ScannerView limits;
-  limits.min_range = scene.scanner.min_range;
-  limits.max_range = scene.scanner.max_range;
-  limits.elevation_min_deg = scene.scanner.elevation_min_deg;
-  limits.elevation_max_deg = scene.scanner.elevation_max_deg;
-  out.returns.push_back(return_directions(seen, out.pre.transform.linear(),
-                                          returns_options(limits, !out.pre.ceiling_found)));
+  out.returns.push_back(return_directions(
+      seen, out.pre.transform.linear(),
+      returns_options(sim_platform::scanner_limits(scene), !out.pre.ceiling_found)));
   std::printf(
       "preprocess: floor σ %.1f mm, %s, %zu → %zu points [%.2f s]\n", 1000 * out.pre.floor.sigma,
       describe_room_height(out.pre.ceiling_found, out.pre.height_from, out.pre.ceiling_height)

@@ -10,6 +10,7 @@
 #include "semioctree/occlusion.h"
 #include "semioctree/openings.h"
 #include "semioctree/preprocess.h"
+#include "semioctree/sim_platform/simulated_platform.h"
 #include "support/lab_scan.h"
 
 namespace semioctree::testing {
@@ -35,18 +36,14 @@ inline PreprocessedLab preprocessed_lab(bool with_returns = false) {
   if (with_returns) {
     const sim::Scene scene =
         sim::load_scene(std::string(SEMIOCTREE_SOURCE_DIR) + "/sim/scenes/lab.scene.json");
-    ScannerView limits;
-    limits.min_range = scene.scanner.min_range;
-    limits.max_range = scene.scanner.max_range;
-    limits.elevation_min_deg = scene.scanner.elevation_min_deg;
-    limits.elevation_max_deg = scene.scanner.elevation_max_deg;
     Cloud seen;  // the returns from the optical centre, world axes
     seen.reserve(lab.world.size());
     for (const auto& p : lab.world)
       seen.push_back(pcl::PointXYZ{float(p.x - lab.origin.x()), float(p.y - lab.origin.y()),
                                    float(p.z - lab.origin.z())});
-    out.returns = return_directions(seen, out.pre.transform.linear(),
-                                    returns_options(limits, !out.pre.ceiling_found));
+    out.returns = return_directions(
+        seen, out.pre.transform.linear(),
+        returns_options(sim_platform::scanner_limits(scene), !out.pre.ceiling_found));
   }
   return out;
 }

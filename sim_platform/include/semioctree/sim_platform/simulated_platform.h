@@ -20,6 +20,9 @@
 
 namespace semioctree::sim_platform {
 
+// The scene's scanner's range and elevation limits (position unused, no returns).
+ScannerView scanner_limits(const sim::Scene& scene);
+
 // The survey parameters a scene fixes: the scanner's range and elevation limits (map and
 // NBV), the robot's radius and the scanner's height.
 void apply_scene(const sim::Scene& scene, SurveyParams& params);
