@@ -55,8 +55,7 @@ TEST(CoverageCache, RoundTripsAndIsKeyedByTheScene) {
   EXPECT_EQ(second.positions, first.positions);
   EXPECT_EQ(second.points, first.points);
   EXPECT_EQ(second.sample_count, first.sample_count);
-  EXPECT_EQ(second.segment_queries, 0u);
-  EXPECT_LT(second.seconds, first.seconds);
+  EXPECT_EQ(second.segment_queries, 0u);  // nothing recomputed (times are the benchmarks')
   std::cout << "box-room reference: computed in " << first.seconds << " s, loaded in "
             << second.seconds << " s\n";
   // The computed and the cached results equal a plain computation.
