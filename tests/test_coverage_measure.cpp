@@ -1,9 +1,11 @@
 // Survey coverage: the reference samples with a measured point within the tolerance.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <limits>
+#include <random>
 #include <stdexcept>
 #include <vector>
 
@@ -104,6 +106,55 @@ TEST(Coverage, PointsAddedOnWorkersFlagWhatTheyFlagOneByOne) {
     acc.add(
         points.size(), [&](std::size_t i) { return points[i]; }, threads);
     EXPECT_EQ(acc.covered(), one_by_one.covered()) << threads << " workers";
+  }
+}
+
+// Points in sweep order (many in a row near the same samples) and the same points
+// shuffled flag exactly the samples a test of every sample against every point flags.
+TEST(Coverage, PointsInRunsOrShuffledFlagWhatABruteForceTestFlags) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> in_box(0.0, 0.6), jitter(-0.004, 0.004);
+  CoverageReference ref;
+  for (int i = 0; i < 2000; ++i) ref.points.emplace_back(in_box(rng), in_box(rng), in_box(rng));
+  // Sweeps: runs of points 4 mm apart along lines through the box.
+  std::vector<Eigen::Vector3d> sweep;
+  for (int line = 0; line < 60; ++line) {
+    const Eigen::Vector3d from(in_box(rng), in_box(rng), in_box(rng));
+    const Eigen::Vector3d step =
+        Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng)).normalized() * 0.004;
+    for (int k = 0; k < 300; ++k)
+      sweep.push_back(from + k * step + Eigen::Vector3d(jitter(rng), jitter(rng), 0.0));
+  }
+  std::vector<Eigen::Vector3d> shuffled = sweep;
+  std::shuffle(shuffled.begin(), shuffled.end(), rng);
+  const double tolerance = 0.03;
+  std::vector<bool> brute(ref.points.size(), false);
+  for (std::size_t s = 0; s < ref.points.size(); ++s)
+    for (const Eigen::Vector3d& p : sweep)
+      if ((p - ref.points[s]).squaredNorm() <= tolerance * tolerance) {
+        brute[s] = true;
+        break;
+      }
+  const std::size_t flagged = std::size_t(std::count(brute.begin(), brute.end(), true));
+  ASSERT_GT(flagged, 200u);
+  ASSERT_LT(flagged, 1800u);
+  for (const auto* points : {&sweep, &shuffled}) {
+    std::vector<Eigen::Vector3f> as_float;
+    for (const Eigen::Vector3d& p : *points) as_float.push_back(p.cast<float>());
+    std::vector<bool> from_floats(ref.points.size(), false);  // brute force on the floats
+    for (std::size_t s = 0; s < ref.points.size(); ++s)
+      for (const Eigen::Vector3f& p : as_float)
+        if ((p.cast<double>() - ref.points[s]).squaredNorm() <= tolerance * tolerance) {
+          from_floats[s] = true;
+          break;
+        }
+    EXPECT_EQ(covered_samples(ref, as_float, tolerance), from_floats);
+    for (const unsigned threads : {1u, 2u}) {
+      CoverageAccumulator acc(ref, tolerance);
+      acc.add(
+          points->size(), [&](std::size_t i) { return (*points)[i]; }, threads);
+      EXPECT_EQ(acc.covered(), brute) << threads << " workers";
+    }
   }
 }
 

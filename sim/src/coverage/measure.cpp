@@ -13,6 +13,51 @@
 
 namespace semioctree::sim {
 
+namespace {
+
+// Flags the samples within the tolerance of points given one after another. A scan's
+// points come in sweep order, so many in a row share the block of cells a point's ball
+// can meet: the block's samples not flagged yet are gathered once, and a sample, once
+// flagged, is not tested again. The flags set are those of a test of every sample of the
+// block for every point, whatever the order.
+template <class Flags>
+class SampleFlagger {
+ public:
+  SampleFlagger(const detail::PointHash& samples, double tolerance, Flags& flags)
+      : samples_(samples), r2_(tolerance * tolerance), flags_(flags) {}
+
+  void add(const Eigen::Vector3d& p) {
+    const detail::PointHash::Block b = samples_.block_of(p);
+    if (!have_block_ || !(b == block_)) {
+      block_ = b;
+      have_block_ = true;
+      open_.clear();
+      samples_.for_each_in_block(b, [&](std::uint32_t i) {
+        if (!flags_[i]) open_.push_back(i);
+      });
+    }
+    for (std::size_t k = 0; k < open_.size();) {
+      if ((samples_.point(open_[k]) - p).squaredNorm() <= r2_) {
+        flags_[open_[k]] = true;
+        open_[k] = open_.back();
+        open_.pop_back();
+      } else {
+        ++k;
+      }
+    }
+  }
+
+ private:
+  const detail::PointHash& samples_;
+  double r2_;
+  Flags& flags_;
+  detail::PointHash::Block block_;
+  bool have_block_ = false;
+  std::vector<std::uint32_t> open_;  // the block's samples not flagged yet
+};
+
+}  // namespace
+
 Coverage count_covered(const std::vector<bool>& covered) {
   Coverage c;
   c.reference_points = covered.size();
@@ -56,12 +101,12 @@ void CoverageAccumulator::add(std::size_t count,
                                             unsigned(std::max<std::size_t>(1, count / kChunk))),
                          [&](bool) {
                            std::vector<std::uint8_t> flags(covered_.size(), 0);
+                           SampleFlagger<std::vector<std::uint8_t>> flagger(*samples_, tolerance_,
+                                                                            flags);
                            for (std::size_t first; (first = next.fetch_add(kChunk)) < count;)
                              for (std::size_t i = first; i < std::min(count, first + kChunk); ++i) {
                                const Eigen::Vector3d p = point_world(i);
-                               if (p.allFinite())
-                                 samples_->for_each_within(p, tolerance_,
-                                                           [&](std::uint32_t j) { flags[j] = 1; });
+                               if (p.allFinite()) flagger.add(p);
                              }
                            const std::lock_guard<std::mutex> lock(merge);
                            for (std::size_t j = 0; j < flags.size(); ++j)
@@ -72,10 +117,9 @@ void CoverageAccumulator::add(std::size_t count,
 std::vector<bool> CoverageAccumulator::flags_of(
     const std::vector<Eigen::Vector3f>& points_world) const {
   std::vector<bool> out(covered_.size(), false);
+  SampleFlagger<std::vector<bool>> flagger(*samples_, tolerance_, out);
   for (const Eigen::Vector3f& p : points_world)
-    if (p.allFinite())
-      samples_->for_each_within(p.cast<double>(), tolerance_,
-                                [&](std::uint32_t i) { out[i] = true; });
+    if (p.allFinite()) flagger.add(p.cast<double>());
   return out;
 }
 

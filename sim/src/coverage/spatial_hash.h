@@ -17,29 +17,47 @@ class PointHash {
  public:
   PointHash(const std::vector<Eigen::Vector3d>& points, double cell);
 
-  // Calls f(i) for each point within `radius` (at most half the cell size) of q, i its
-  // index in the vector given to the constructor. Such a ball meets at most the 2 × 2 × 2
-  // cells nearest q: its own and, on each axis, the neighbour on the nearer side.
-  template <class F>
-  void for_each_within(const Eigen::Vector3d& q, double radius, F&& f) const {
-    if (slots_.empty()) return;
-    const double r2 = radius * radius;
-    long lo[3], hi[3];
+  // The 2 × 2 × 2 cells nearest a point q, named by their lowest cell: a ball of radius at
+  // most half the cell size about q meets no other cell (its own cell and, on each axis,
+  // the neighbour on the nearer side).
+  struct Block {
+    long x = 0, y = 0, z = 0;
+    bool operator==(const Block& o) const { return x == o.x && y == o.y && z == o.z; }
+  };
+  Block block_of(const Eigen::Vector3d& q) const {
+    long lo[3];
     for (int a = 0; a < 3; ++a) {
       const double u = q[a] / cell_;
       const long i = static_cast<long>(std::floor(u));
       lo[a] = u - double(i) < 0.5 ? i - 1 : i;
-      hi[a] = lo[a] + 1;
     }
-    for (long z = lo[2]; z <= hi[2]; ++z)
-      for (long y = lo[1]; y <= hi[1]; ++y)
-        for (long x = lo[0]; x <= hi[0]; ++x) {
+    return {lo[0], lo[1], lo[2]};
+  }
+
+  // Calls f(i) for each point in the block's cells, i its index in the vector given to
+  // the constructor.
+  template <class F>
+  void for_each_in_block(const Block& b, F&& f) const {
+    if (slots_.empty()) return;
+    for (long z = b.z; z <= b.z + 1; ++z)
+      for (long y = b.y; y <= b.y + 1; ++y)
+        for (long x = b.x; x <= b.x + 1; ++x) {
           const Slot* s = find(grid_cell_key(x, y, z));
           if (!s) continue;
-          for (std::uint32_t k = s->begin; k < s->begin + s->count; ++k)
-            if ((points_[by_cell_[k]] - q).squaredNorm() <= r2) f(by_cell_[k]);
+          for (std::uint32_t k = s->begin; k < s->begin + s->count; ++k) f(by_cell_[k]);
         }
   }
+
+  // Calls f(i) for each point within `radius` (at most half the cell size) of q.
+  template <class F>
+  void for_each_within(const Eigen::Vector3d& q, double radius, F&& f) const {
+    const double r2 = radius * radius;
+    for_each_in_block(block_of(q), [&](std::uint32_t i) {
+      if ((points_[i] - q).squaredNorm() <= r2) f(i);
+    });
+  }
+
+  const Eigen::Vector3d& point(std::uint32_t i) const { return points_[i]; }
 
  private:
   struct Slot {
