@@ -31,19 +31,34 @@ std::vector<LeafMark> marker_leaves(const SemiOcTree& tree, const std::vector<Po
   return marks;
 }
 
+// `dir`, created if need be (FileError if it cannot be).
+std::filesystem::path output_directory(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw FileError(dir + ": cannot create directory: " + ec.message());
+  return dir;
+}
+
 }  // namespace
 
 void write_map_files(const SemiOcTree& tree, const std::string& dir, const SliceOptions& slice,
                      const MapFiles& names) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw FileError(dir + ": cannot create directory: " + ec.message());
-  const fs::path d(dir);
+  write_octomap_exports(tree, dir, slice, names);
+  write_semioctree_and_slice(tree, dir, slice, names);
+}
+
+void write_octomap_exports(const SemiOcTree& tree, const std::string& dir,
+                           const SliceOptions& slice, const MapFiles& names) {
+  const std::filesystem::path d = output_directory(dir);
   const std::vector<LeafMark> marks = marker_leaves(tree, slice.scans, slice.nbv);
-  write_tree_file(tree, (d / names.semioctree).string());
   write_tree_file(*to_color_octree(tree, marks), (d / names.color).string());
   write_binary_file(*to_occupancy_octree(tree, marks), (d / names.occupancy).string());
+}
+
+void write_semioctree_and_slice(const SemiOcTree& tree, const std::string& dir,
+                                const SliceOptions& slice, const MapFiles& names) {
+  const std::filesystem::path d = output_directory(dir);
+  write_tree_file(tree, (d / names.semioctree).string());
   write_slice_png(tree, (d / names.slice).string(), slice);
 }
 

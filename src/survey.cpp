@@ -124,6 +124,13 @@ Survey::Survey(const SurveyParams& params, SurveyObserver* observer)
   if (params_.max_scans < 1) throw std::invalid_argument("Survey: max_scans must be at least 1");
 }
 
+Survey::~Survey() {
+  try {
+    observer_->map_changing();
+  } catch (...) {  // the observer reports its own failures; a destructor must not throw
+  }
+}
+
 namespace {
 
 // A placement sharing less than this share of the overlap predicted for where the scan
@@ -345,6 +352,7 @@ const ScanRecord& Survey::add_scan_telling(
   // The scan's points are read (placed, levelled, decimated, their directions binned).
   seen.reset();
   in.points.reset();
+  observer_->map_changing();
   rec.update = map_.add_scan(*registered, scanner, pre.ceiling_height, std::move(seen_directions));
   rec.seconds.occupancy = rec.update.seconds_occupancy;
   rec.seconds.openings = rec.update.seconds_openings;

@@ -45,7 +45,7 @@ SurveyParams params_for(const sim::Scene& scene, std::size_t max_scans, double s
   return p;
 }
 
-// Every report as a line: "taken 0", "stage 0 1", "done 0", "moved 0".
+// Every report as a line: "taken 0", "stage 0 1", "done 0", "moved 0", "map changing".
 struct EventLog : SurveyObserver {
   std::vector<std::string> events;
   std::size_t scored_calls = 0;
@@ -62,6 +62,7 @@ struct EventLog : SurveyObserver {
   void moved(const ScanRecord& s, const NextScanChoice&, const NextScanPolicy&) override {
     events.push_back("moved " + std::to_string(s.index));
   }
+  void map_changing() override { events.push_back("map changing"); }
 };
 
 // Takes the lowest-scoring candidate and remembers what it chose.
@@ -79,6 +80,13 @@ struct WorstScorePolicy : NextScanPolicy {
   }
   const char* what() const override { return "worst candidate"; }
 };
+
+// The map an observer was given goes with the Survey: the observer is told.
+TEST(SurveyStage, TellsItsObserverWhenItsMapGoes) {
+  EventLog log;
+  { Survey survey(params_for(test_scene(), 3, 0.1), &log); }
+  EXPECT_EQ(log.events, std::vector<std::string>{"map changing"});
+}
 
 TEST(SurveyStage, ReportsEveryStageInOrderAndEndsByItsRule) {
   const sim::Scene scene = test_scene();
@@ -106,6 +114,7 @@ TEST(SurveyStage, ReportsEveryStageInOrderAndEndsByItsRule) {
     expected.push_back("stage " + s + " " + std::to_string(int(SurveyStage::kPreprocessed)));
     if (i > 0)
       expected.push_back("stage " + s + " " + std::to_string(int(SurveyStage::kRegistered)));
+    expected.push_back("map changing");  // an observer still writing the map waits here
     expected.push_back("stage " + s + " " + std::to_string(int(SurveyStage::kMapped)));
     expected.push_back("stage " + s + " " + std::to_string(int(SurveyStage::kRoomFound)));
     expected.push_back("stage " + s + " " + std::to_string(int(SurveyStage::kPlanned)));

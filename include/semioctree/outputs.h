@@ -31,6 +31,14 @@ struct MapFiles {
 // exports as they are built; `tree` is neither changed nor copied.
 void write_map_files(const SemiOcTree& tree, const std::string& dir, const SliceOptions& slice,
                      const MapFiles& names = {});
+// write_map_files in two parts, which may run at different times: the two OctoMap files
+// (built in memory first, an OctoMap tree of every labelled octant each, one at a time),
+// and semioctree.ot and slice.png (written from `tree` itself, with little memory beside
+// it). Each creates `dir` if needed.
+void write_octomap_exports(const SemiOcTree& tree, const std::string& dir,
+                           const SliceOptions& slice, const MapFiles& names = {});
+void write_semioctree_and_slice(const SemiOcTree& tree, const std::string& dir,
+                                const SliceOptions& slice, const MapFiles& names = {});
 
 // One vertex of a PLY file: its position, and its colour and flag if the layout has them.
 struct PlyVertex {

@@ -250,6 +250,11 @@ class SurveyObserver {
   virtual void candidates_scored(std::size_t done, std::size_t total) { (void)done, (void)total; }
   // Survey::run: the scan is mapped and placed on the platform.
   virtual void scan_done(const ScanRecord& scan, const SurveyMap& map) { (void)scan, (void)map; }
+  // The map given to scan_done is about to change (the next scan's update) or to go (the
+  // Survey's destructor): an observer still reading it on a thread of its own must be
+  // done with it when this returns. What it throws ends the scan as an error would
+  // (the destructor ignores it).
+  virtual void map_changing() {}
   // Survey::run: the platform moved to `choice`, chosen by `policy`.
   virtual void moved(const ScanRecord& scan, const NextScanChoice& choice,
                      const NextScanPolicy& policy) {
@@ -283,7 +288,11 @@ struct Waypoint {
 class Survey {
  public:
   // Throws std::invalid_argument for max_scans < 1.
+  // `observer` (if any) must outlive the Survey.
   explicit Survey(const SurveyParams& params, SurveyObserver* observer = nullptr);
+  ~Survey();  // tells the observer the map goes (map_changing)
+  Survey(const Survey&) = delete;
+  Survey& operator=(const Survey&) = delete;
 
   // One scan through preprocess → register → update → NBV, reporting each stage.
   // `robot_position`: where the robot stands (default: under the scanner).

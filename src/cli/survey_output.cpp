@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <future>
 #include <stdexcept>
 
 #include "semioctree/figures.h"
@@ -215,7 +216,6 @@ void SurveyOutput::candidates_scored(std::size_t done, std::size_t total) {
 }
 
 void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
-  const auto t0 = Clock::now();
   char name[16];
   std::snprintf(name, sizeof name, "scan_%02zu", s.index);
   const std::string dir = (std::filesystem::path(dir_) / name).string();
@@ -236,11 +236,23 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
                               Point3(op.corners[0].x(), op.corners[0].y(), op.corners[0].z()),
                               Point3(op.corners[1].x(), op.corners[1].y(), op.corners[1].z())});
   slice.title = std::string(name) + (best ? ": scans and next best view" : ": scans");
-  write_map_files(map.tree(), dir, slice);
-  write_cloud_ply(map.merged_cloud(), (std::filesystem::path(dir) / "cloud.ply").string());
-  const double write_seconds = seconds_since(t0);
-  std::printf("  wrote %s/ [%.2f s]\n", dir.c_str(), write_seconds);
-  std::fflush(stdout);
+  // The two OctoMap files now (they take memory while built); semioctree.ot, slice.png
+  // and cloud.ply on a thread of their own, beside the next scan's simulation,
+  // preprocessing and registration: the map stays as it is until the next scan's update,
+  // which waits for them (map_changing).
+  map_changing();  // a write still running is finished first
+  const auto start = Clock::now();
+  write_octomap_exports(map.tree(), dir, slice);
+  const double now_seconds = seconds_since(start);
+  writing_.index = s.index;
+  writing_.dir = dir;
+  writing_.seconds =
+      std::async(std::launch::async, [&map, dir, slice = std::move(slice), now_seconds] {
+        const auto t0 = Clock::now();
+        write_semioctree_and_slice(map.tree(), dir, slice);
+        write_cloud_ply(map.merged_cloud(), (std::filesystem::path(dir) / "cloud.ply").string());
+        return PendingWrite::Seconds{now_seconds, seconds_since(t0)};
+      });
 
   json r;
   r["index"] = s.index;
@@ -330,11 +342,20 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
                   {"openings", s.seconds.openings},
                   {"occlusion", s.seconds.occlusion},
                   {"nbv", s.seconds.nbv},
-                  {"write", write_seconds},
-                  {"total", s.seconds.total + write_seconds}};
+                  {"write", nullptr},  // when written (map_changing)
+                  {"total", s.seconds.total}};
   r["peak_rss_mib"] = peak_resident_mib();  // of the whole run so far
   if (records_.size() <= s.index) records_.resize(s.index + 1);
   records_[s.index] = r;
+}
+
+void SurveyOutput::map_changing() {
+  if (!writing_.seconds.valid()) return;
+  const PendingWrite::Seconds seconds = writing_.seconds.get();
+  records_.at(writing_.index)["seconds"]["write"] = seconds.now + seconds.background;
+  std::printf("  wrote %s/ [%.2f s, %.2f s of it beside the survey]\n", writing_.dir.c_str(),
+              seconds.now + seconds.background, seconds.background);
+  std::fflush(stdout);
 }
 
 void SurveyOutput::registration_failed(const RegistrationFailure& f) {
@@ -355,7 +376,8 @@ void SurveyOutput::registration_failed(const RegistrationFailure& f) {
 }
 
 void SurveyOutput::write_survey_json(const std::string& stopped_because, const json& extra,
-                                     const SurveyMap* map) const {
+                                     const SurveyMap* map) {
+  map_changing();  // the last scan_NN/ written
   json openings = json::array();
   if (map)
     for (const DetectedOpening& op : map->openings()) {

@@ -3,6 +3,7 @@
 // (docs/outputs.md). An observer of the stage: the stage itself neither prints nor writes.
 #pragma once
 
+#include <future>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -22,17 +23,22 @@ class SurveyOutput : public SurveyObserver {
 
   void stage_done(SurveyStage stage, const ScanRecord& scan) override;
   void candidates_scored(std::size_t done, std::size_t total) override;
-  // Writes scan_NN/ and keeps the scan's survey.json record.
+  // Keeps the scan's survey.json record and writes scan_NN/: its OctoMap files at once, the
+  // rest on a thread of its own beside the next scan's stages up to its update
+  // (map_changing); a write that fails there throws from map_changing, or from
+  // write_survey_json.
   void scan_done(const ScanRecord& scan, const SurveyMap& map) override;
+  // Waits for scan_NN/ to be written and says so.
+  void map_changing() override;
   // Says so and keeps it for survey.json's "registration_failures".
   void registration_failed(const RegistrationFailure& failure) override;
 
   // The record of scan `index` (after scan_done), for keys a command adds.
   nlohmann::json& record(std::size_t index) { return records_.at(index); }
   // survey.json with `stopped_because` and any extra top-level keys, then report.html
-  // from it.
+  // from it (after the last scan_NN/ is written).
   void write_survey_json(const std::string& stopped_because, const nlohmann::json& extra,
-                         const SurveyMap* map) const;
+                         const SurveyMap* map);
   const std::string& dir() const { return dir_; }
 
  private:
@@ -42,6 +48,17 @@ class SurveyOutput : public SurveyObserver {
   std::vector<nlohmann::json> records_;
   std::vector<std::vector<Point3>> routes_;  // the robot's drives so far, for the slices
   nlohmann::json failures_ = nlohmann::json::array();
+  // The scan_NN/ being written: its scan and folder, and the seconds of its two parts
+  // (the future holds the background part's error, if any).
+  struct PendingWrite {
+    struct Seconds {
+      double now = 0, background = 0;
+    };
+    std::size_t index = 0;
+    std::string dir;
+    std::future<Seconds> seconds;
+  };
+  PendingWrite writing_;
 };
 
 // survey.json's "octants" of a map (total, by_level, by_label), and its
