@@ -443,12 +443,15 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
   detail::parallel_for(chunks, workers, 1, [&](std::size_t c, unsigned w) {
     if (nearest[w].empty()) nearest[w].assign(std::size_t(degree.total), kNone);
     if (gather_depths) per_worker[w].size_for(expected_bins);
+    // Counted here, added once a chunk: the workers' counts share a cache line.
+    std::size_t chunk_returns = 0;
     each_return(c, [&](const DirectionBins::Angles& a) {
       float& n = nearest[w][std::size_t(degree.bin_of(a))];
       n = std::min(n, float(a.length));
-      ++returns[w];
+      ++chunk_returns;
       if (gather_depths) per_worker[w].add(expected_bins, a);
     });
+    returns[w] += chunk_returns;
   });
   std::size_t total_returns = 0;
   for (unsigned w = 0; w < workers; ++w) total_returns += returns[w];

@@ -100,7 +100,8 @@ std::vector<double> score_targets(const SemiOcTree& tree, const std::vector<Targ
             shadow->reset(a, !own || nbv_detail::blocks(own->label(), params.see_through_doors));
           }
         }
-        ScoringStats& st = per[item];
+        // Counted here, stored once an item: neighbouring items' counts share a cache line.
+        ScoringStats st;
         for (std::size_t b = first_block; b < first_block + per_item; ++b) {
           double sum = 0;
           const std::size_t end = std::min(targets.size(), (b + 1) * kTargetsPerSum);
@@ -123,7 +124,9 @@ std::vector<double> score_targets(const SemiOcTree& tree, const std::vector<Targ
             const Los los = params.method == 2
                                 ? los_cells(tree, level, a, t, &cache, params.see_through_doors)
                                 : los_octants(tree, a, t.center, &cache, params.see_through_doors);
-            if (los.blocker) {  // keep the last two
+            // Keep the last two blockers (stored only when new: the other workers read
+            // these lines).
+            if (los.blocker && memo[2 * i].load(std::memory_order_relaxed) != los.blocker) {
               memo[2 * i + 1].store(memo[2 * i].load(std::memory_order_relaxed),
                                     std::memory_order_relaxed);
               memo[2 * i].store(los.blocker, std::memory_order_relaxed);
@@ -135,6 +138,7 @@ std::vector<double> score_targets(const SemiOcTree& tree, const std::vector<Targ
           }
           partial[c * blocks + b] = sum;
         }
+        per[item] = st;
         if (items_left[c].fetch_sub(1, std::memory_order_acq_rel) == 1) {
           const std::size_t done = scored.fetch_add(1, std::memory_order_relaxed) + 1;
           if (params.progress) params.progress(done, positions.size());
