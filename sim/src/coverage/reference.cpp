@@ -298,14 +298,6 @@ void fill_points(const std::vector<SurfaceSample>& samples, CoverageReference& r
   for (std::uint32_t i : ref.visible) ref.points.push_back(samples[i].position);
 }
 
-// fill_points from the samples streamed, none held.
-void fill_points(const GroundTruth& truth, CoverageReference& ref) {
-  ref.points.clear();
-  ref.points.reserve(ref.visible.size());
-  for (const SurfaceSample& s : surface_samples_at(truth.scene(), ref.sample_spacing, ref.visible))
-    ref.points.push_back(s.position);
-}
-
 // coverage_grid_positions on the floor plan `plan` of the scene.
 std::vector<Eigen::Vector3d> grid_positions(const GroundTruth& truth, const FloorPlan& plan,
                                             double grid_spacing) {
@@ -413,7 +405,6 @@ CoverageReference load_or_compute_coverage_reference(const GroundTruth& truth,
       ref.key = key;
       ref.from_cache = true;
       ref.cache_file = file.string();
-      fill_points(truth, ref);
     } else {
       ref = compute_here();
       if (detail::write_cached_reference(file, ref)) ref.cache_file = file.string();

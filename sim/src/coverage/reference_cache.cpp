@@ -64,7 +64,8 @@ std::uint64_t checksum(const char* data, std::size_t n) {
 }
 
 // The file: magic, rule version, key (length, bytes), both spacings, sample count,
-// positions (count, x y z each), visible indices (count, u32 each), checksum of all that.
+// positions (count, x y z each), visible indices (count, u32 each), the visible samples'
+// positions (x y z each, as many), checksum of all that.
 std::string serialize(const CoverageReference& ref) {
   Writer w;
   w.raw(kMagic, sizeof kMagic);
@@ -78,6 +79,7 @@ std::string serialize(const CoverageReference& ref) {
   for (const auto& p : ref.positions) w.raw(p.data(), 3 * sizeof(double));
   w.value(static_cast<std::uint64_t>(ref.visible.size()));
   w.raw(ref.visible.data(), ref.visible.size() * sizeof(std::uint32_t));
+  for (const auto& p : ref.points) w.raw(p.data(), 3 * sizeof(double));
   w.value(checksum(w.str().data(), w.str().size()));
   return std::move(w.str());
 }
@@ -106,9 +108,14 @@ bool deserialize(const std::string& data, const std::string& key, double grid_sp
   ref.positions.resize(np);
   for (auto& p : ref.positions)
     if (!r.raw(p.data(), 3 * sizeof(double))) return false;
-  if (!r.value(nv) || nv > count || nv * sizeof(std::uint32_t) != r.remaining()) return false;
+  if (!r.value(nv) || nv > count ||
+      nv * (sizeof(std::uint32_t) + 3 * sizeof(double)) != r.remaining())
+    return false;
   ref.visible.resize(nv);
   if (!r.raw(ref.visible.data(), nv * sizeof(std::uint32_t))) return false;
+  ref.points.resize(nv);
+  for (auto& p : ref.points)
+    if (!r.raw(p.data(), 3 * sizeof(double))) return false;
   for (std::size_t i = 0; i < ref.visible.size(); ++i)
     if (ref.visible[i] >= count || (i > 0 && ref.visible[i] <= ref.visible[i - 1])) return false;
   ref.grid_spacing = g;

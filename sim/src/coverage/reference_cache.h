@@ -18,8 +18,9 @@ namespace semioctree::sim::detail {
 // cache files then get another name and are never read. 2: nothing seen through an
 // opening; 3: reachable positions only; 4: nor through one from a position standing in
 // its doorway; 5: searched room by room, a gap between walls narrower than a plan cell
-// counting as closed (docs/coverage.md, "Rooms").
-constexpr std::uint32_t kCoverageRuleVersion = 5;
+// counting as closed (docs/coverage.md, "Rooms"); 6: the visible samples' positions in
+// the file.
+constexpr std::uint32_t kCoverageRuleVersion = 6;
 // The floor-plan cell coverage_grid_positions finds the survey area with (part of the key).
 constexpr double kCoveragePlanCell = 0.05;
 
@@ -52,7 +53,8 @@ std::string reference_key(const GroundTruth& truth, const SamplesDigest& samples
 // `<cache_dir>/coverage-<key>.bin`.
 std::filesystem::path cache_file_path(const std::string& cache_dir, const std::string& key);
 
-// Reads `file` into ref.grid_spacing, sample_spacing, sample_count, positions and visible.
+// Reads `file` into ref.grid_spacing, sample_spacing, sample_count, positions, visible
+// and points.
 // False (and `ref` unusable) unless it exists and its size, header, key, spacings, sample
 // count, checksum and indices all check out.
 bool read_cached_reference(const std::filesystem::path& file, const std::string& key,
