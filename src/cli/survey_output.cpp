@@ -1,5 +1,7 @@
 #include "survey_output.h"
 
+#include <malloc.h>
+
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -251,6 +253,9 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
         const auto t0 = Clock::now();
         write_semioctree_and_slice(map.tree(), dir, slice);
         write_cloud_ply(map.merged_cloud(), (std::filesystem::path(dir) / "cloud.ply").string());
+        // What this thread freed stays with its own malloc arena, which the survey's thread
+        // does not take from: give it back to the system.
+        malloc_trim(0);
         return PendingWrite::Seconds{now_seconds, seconds_since(t0)};
       });
 
