@@ -128,26 +128,29 @@ TEST(Coverage, PointsInRunsOrShuffledFlagWhatABruteForceTestFlags) {
   std::vector<Eigen::Vector3d> shuffled = sweep;
   std::shuffle(shuffled.begin(), shuffled.end(), rng);
   const double tolerance = 0.03;
-  std::vector<bool> brute(ref.points.size(), false);
-  for (std::size_t s = 0; s < ref.points.size(); ++s)
-    for (const Eigen::Vector3d& p : sweep)
-      if ((p - ref.points[s]).squaredNorm() <= tolerance * tolerance) {
-        brute[s] = true;
-        break;
-      }
+  // The samples with a point within the tolerance, every sample tested against every point.
+  auto brute_force = [&](const std::vector<Eigen::Vector3d>& points) {
+    std::vector<bool> flags(ref.points.size(), false);
+    for (std::size_t s = 0; s < ref.points.size(); ++s)
+      for (const Eigen::Vector3d& p : points)
+        if ((p - ref.points[s]).squaredNorm() <= tolerance * tolerance) {
+          flags[s] = true;
+          break;
+        }
+    return flags;
+  };
+  const std::vector<bool> brute = brute_force(sweep);
   const std::size_t flagged = std::size_t(std::count(brute.begin(), brute.end(), true));
   ASSERT_GT(flagged, 200u);
   ASSERT_LT(flagged, 1800u);
   for (const auto* points : {&sweep, &shuffled}) {
     std::vector<Eigen::Vector3f> as_float;
-    for (const Eigen::Vector3d& p : *points) as_float.push_back(p.cast<float>());
-    std::vector<bool> from_floats(ref.points.size(), false);  // brute force on the floats
-    for (std::size_t s = 0; s < ref.points.size(); ++s)
-      for (const Eigen::Vector3f& p : as_float)
-        if ((p.cast<double>() - ref.points[s]).squaredNorm() <= tolerance * tolerance) {
-          from_floats[s] = true;
-          break;
-        }
+    std::vector<Eigen::Vector3d> floats_as_double;  // what covered_samples reads
+    for (const Eigen::Vector3d& p : *points) {
+      as_float.push_back(p.cast<float>());
+      floats_as_double.push_back(as_float.back().cast<double>());
+    }
+    const std::vector<bool> from_floats = brute_force(floats_as_double);
     EXPECT_EQ(covered_samples(ref, as_float, tolerance), from_floats);
     for (const unsigned threads : {1u, 2u}) {
       CoverageAccumulator acc(ref, tolerance);
