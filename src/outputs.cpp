@@ -43,21 +43,10 @@ std::filesystem::path output_directory(const std::string& dir) {
 
 void write_map_files(const SemiOcTree& tree, const std::string& dir, const SliceOptions& slice,
                      const MapFiles& names) {
-  write_octomap_exports(tree, dir, slice, names);
-  write_semioctree_and_slice(tree, dir, slice, names);
-}
-
-void write_octomap_exports(const SemiOcTree& tree, const std::string& dir,
-                           const SliceOptions& slice, const MapFiles& names) {
   const std::filesystem::path d = output_directory(dir);
   const std::vector<LeafMark> marks = marker_leaves(tree, slice.scans, slice.nbv);
-  write_tree_file(*to_color_octree(tree, marks), (d / names.color).string());
-  write_binary_file(*to_occupancy_octree(tree, marks), (d / names.occupancy).string());
-}
-
-void write_semioctree_and_slice(const SemiOcTree& tree, const std::string& dir,
-                                const SliceOptions& slice, const MapFiles& names) {
-  const std::filesystem::path d = output_directory(dir);
+  write_color_octree_file(tree, marks, (d / names.color).string());
+  write_occupancy_binary_file(tree, marks, (d / names.occupancy).string());
   write_tree_file(tree, (d / names.semioctree).string());
   write_slice_png(tree, (d / names.slice).string(), slice);
 }

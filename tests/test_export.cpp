@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <random>
 #include <regex>
 #include <sstream>
 
@@ -140,6 +141,80 @@ TEST(Export, OccupancyTreeMapsLabels) {
     const auto it = back_leaves.find(id);
     ASSERT_NE(it, back_leaves.end());
     EXPECT_EQ(bt->isNodeOccupied(it->second), occ->isNodeOccupied(node));
+  }
+}
+
+std::string file_bytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The .ot and .bt written straight from the map hold the bytes OctoMap writes for the trees
+// to_color_octree and to_occupancy_octree build: on empty maps, the sample tree and random
+// maps, with marks in occupied leaves, inside coarse and split octants of every label
+// (occluded: exported in colour, unknown in the .bt), in unknown space, outside the map,
+// and two on one leaf (the later wins).
+TEST(Export, FilesWrittenFromTheMapAreTheBytesOctoMapWrites) {
+  const auto dir = testing::temp_dir("stream_export");
+  std::vector<std::unique_ptr<SemiOcTree>> trees;
+  trees.push_back(std::make_unique<SemiOcTree>(0.1, 0.4));
+  trees.push_back(std::make_unique<SemiOcTree>(0.1, 0.4));
+  trees.back()->create_coarse({0, 0, 0}, Label::kUnknown);
+  trees.push_back(testing::sample_tree());
+  std::mt19937 rng(7);
+  for (int r = 0; r < 3; ++r) {
+    auto t = std::make_unique<SemiOcTree>(0.05, 0.8);
+    std::uniform_int_distribution<int> cell(-2, 2), label(0, kLabelCount - 1);
+    for (int i = 0; i < 30; ++i)
+      t->create_coarse({cell(rng), cell(rng), cell(rng) + 2}, Label(label(rng)));
+    std::uniform_real_distribution<double> at(-2.0, 2.4);
+    std::uniform_int_distribution<unsigned> level(0, t->leaf_level());
+    for (int i = 0; i < 400; ++i) {
+      octomap::OcTreeKey k;
+      if (t->key_of({at(rng), at(rng), at(rng) + 2.0}, k))
+        t->set_label(k, level(rng), Label(label(rng)));
+    }
+    trees.push_back(std::move(t));
+  }
+  for (std::size_t i = 0; i < trees.size(); ++i) {
+    const SemiOcTree& t = *trees[i];
+    std::vector<std::vector<LeafMark>> mark_sets(1);
+    std::vector<LeafMark> marks;
+    auto mark = [&](const Point3& p, Label l) {
+      octomap::OcTreeKey k;
+      if (t.key_of(p, k)) marks.push_back({k, l});
+    };
+    // Wherever there are octants: the centre and a corner leaf of some of them.
+    std::size_t n = 0;
+    t.for_each_octant([&](const Octant& o) {
+      if (n++ % 7 != 0) return;
+      mark(o.center, n % 2 ? Label::kScan : Label::kNbv);
+      mark(Point3(o.center.x - o.size / 2 + 0.01, o.center.y - o.size / 2 + 0.01,
+                  o.center.z - o.size / 2 + 0.01),
+           Label::kNbv);
+    });
+    mark({5.0, 5.0, 5.0}, Label::kScan);  // outside every coarse voxel
+    mark({0.6, 0.6, 0.3}, Label::kScan);
+    mark({0.6, 0.6, 0.3}, Label::kNbv);  // the later wins
+    mark_sets.push_back(marks);
+    for (std::size_t m = 0; m < mark_sets.size(); ++m) {
+      const std::string name = std::to_string(i) + "_" + std::to_string(m);
+      write_tree_file(*to_color_octree(t, mark_sets[m]), (dir / (name + "_built.ot")).string());
+      write_color_octree_file(t, mark_sets[m], (dir / (name + "_streamed.ot")).string());
+      write_binary_file(*to_occupancy_octree(t, mark_sets[m]),
+                        (dir / (name + "_built.bt")).string());
+      write_occupancy_binary_file(t, mark_sets[m], (dir / (name + "_streamed.bt")).string());
+      for (const char* ext : {".ot", ".bt"}) {
+        const std::string built = file_bytes(dir / (name + "_built" + ext));
+        const std::string streamed = file_bytes(dir / (name + "_streamed" + ext));
+        EXPECT_GT(built.size(), 0u);
+        EXPECT_TRUE(built == streamed)
+            << "tree " << i << ", marks " << m << ", " << ext << ": " << built.size()
+            << " bytes built, " << streamed.size() << " streamed";
+      }
+    }
   }
 }
 

@@ -28,17 +28,10 @@ struct MapFiles {
 // cube of 3×3×3 leaves (the scanner's head) labelled `scan` at every position of
 // slice.scans and `nbv` at slice.nbv, so that octovis shows where the scans stood and
 // where to go next (occupancy.bt shows them as free). The markers are drawn into the
-// exports as they are built; `tree` is neither changed nor copied.
+// exports as they are written; `tree` is neither changed nor copied, and no OctoMap tree
+// is built (a few bytes a node beside it).
 void write_map_files(const SemiOcTree& tree, const std::string& dir, const SliceOptions& slice,
                      const MapFiles& names = {});
-// write_map_files in two parts, which may run at different times: the two OctoMap files
-// (built in memory first, an OctoMap tree of every labelled octant each, one at a time),
-// and semioctree.ot and slice.png (written from `tree` itself, with little memory beside
-// it). Each creates `dir` if needed.
-void write_octomap_exports(const SemiOcTree& tree, const std::string& dir,
-                           const SliceOptions& slice, const MapFiles& names = {});
-void write_semioctree_and_slice(const SemiOcTree& tree, const std::string& dir,
-                                const SliceOptions& slice, const MapFiles& names = {});
 
 // One vertex of a PLY file: its position, and its colour and flag if the layout has them.
 struct PlyVertex {

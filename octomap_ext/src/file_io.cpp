@@ -12,7 +12,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <iomanip>
 #include <mutex>
 #include <set>
 #include <sstream>
@@ -255,12 +254,25 @@ void write_tree_file(const octomap::AbstractOcTree& tree, const std::string& pat
   });
 }
 
+void write_ot_header(std::ostream& s, const std::string& type, std::size_t size,
+                     double resolution) {
+  s << kOtHeader
+    << "\n# (feel free to add / change comments, but leave the first line as it is!)\n#\n"
+    << "id " << type << "\nsize " << size << "\nres " << resolution << "\ndata\n";
+}
+
+void write_bt_header(std::ostream& s, std::size_t size, double resolution) {
+  // OctoMap's writeBinaryConst writes this same header but also prints " done." on stderr.
+  const std::streamsize precision = s.precision(15);
+  s << kBtHeader << "\n# written by semioctree\nid OcTree\nsize " << size << "\nres " << resolution
+    << "\ndata\n";
+  s.precision(precision);
+}
+
 void write_binary_file(const octomap::OcTree& tree, const std::string& path) {
-  // OctoMap's writeBinaryConst writes this same header but also prints
-  // " done." on stderr; the node stream is OctoMap's own writeBinaryData.
+  // The node stream is OctoMap's own writeBinaryData.
   write_file_atomically(path, [&](std::ostream& s) {
-    s << kBtHeader << "\n# written by semioctree\nid " << tree.getTreeType() << "\nsize "
-      << tree.size() << "\nres " << std::setprecision(15) << tree.getResolution() << "\ndata\n";
+    write_bt_header(s, tree.size(), tree.getResolution());
     tree.writeBinaryData(s);
     if (!s) throw FileError(path + ": could not write the tree");
   });

@@ -35,11 +35,11 @@ void add_export_command(CLI::App& app) {
                                {{"--color", o->color}, {"--bt", o->bt}, {"--ply", o->ply}});
     const auto tree = read_semioctree_file(o->in);
     if (!o->color.empty()) {
-      write_tree_file(*to_color_octree(*tree), o->color);
+      write_color_octree_file(*tree, {}, o->color);
       std::cout << "wrote " << o->color << " (ColorOcTree)\n";
     }
     if (!o->bt.empty()) {
-      write_binary_file(*to_occupancy_octree(*tree), o->bt);
+      write_occupancy_binary_file(*tree, {}, o->bt);
       std::cout << "wrote " << o->bt << " (OcTree occupancy)\n";
     }
     if (!o->ply.empty()) {

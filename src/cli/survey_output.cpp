@@ -238,26 +238,21 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
                               Point3(op.corners[0].x(), op.corners[0].y(), op.corners[0].z()),
                               Point3(op.corners[1].x(), op.corners[1].y(), op.corners[1].z())});
   slice.title = std::string(name) + (best ? ": scans and next best view" : ": scans");
-  // The two OctoMap files now (they take memory while built); semioctree.ot, slice.png
-  // and cloud.ply on a thread of their own, beside the next scan's simulation,
-  // preprocessing and registration: the map stays as it is until the next scan's update,
-  // which waits for them (map_changing).
+  // scan_NN/ on a thread of its own, beside the next scan's simulation, preprocessing and
+  // registration: the map stays as it is until the next scan's update, which waits for it
+  // (map_changing). The files are written from the map with a few bytes a node beside it.
   map_changing();  // a write still running is finished first
-  const auto start = Clock::now();
-  write_octomap_exports(map.tree(), dir, slice);
-  const double now_seconds = seconds_since(start);
   writing_.index = s.index;
   writing_.dir = dir;
-  writing_.seconds =
-      std::async(std::launch::async, [&map, dir, slice = std::move(slice), now_seconds] {
-        const auto t0 = Clock::now();
-        write_semioctree_and_slice(map.tree(), dir, slice);
-        write_cloud_ply(map.merged_cloud(), (std::filesystem::path(dir) / "cloud.ply").string());
-        // What this thread freed stays with its own malloc arena, which the survey's thread
-        // does not take from: give it back to the system.
-        malloc_trim(0);
-        return PendingWrite::Seconds{now_seconds, seconds_since(t0)};
-      });
+  writing_.seconds = std::async(std::launch::async, [&map, dir, slice = std::move(slice)] {
+    const auto t0 = Clock::now();
+    write_map_files(map.tree(), dir, slice);
+    write_cloud_ply(map.merged_cloud(), (std::filesystem::path(dir) / "cloud.ply").string());
+    // What this thread freed stays with its own malloc arena, which the survey's thread
+    // does not take from: give it back to the system.
+    malloc_trim(0);
+    return seconds_since(t0);
+  });
 
   json r;
   r["index"] = s.index;
@@ -356,10 +351,9 @@ void SurveyOutput::scan_done(const ScanRecord& s, const SurveyMap& map) {
 
 void SurveyOutput::map_changing() {
   if (!writing_.seconds.valid()) return;
-  const PendingWrite::Seconds seconds = writing_.seconds.get();
-  records_.at(writing_.index)["seconds"]["write"] = seconds.now + seconds.background;
-  std::printf("  wrote %s/ [%.2f s, %.2f s of it beside the survey]\n", writing_.dir.c_str(),
-              seconds.now + seconds.background, seconds.background);
+  const double seconds = writing_.seconds.get();
+  records_.at(writing_.index)["seconds"]["write"] = seconds;
+  std::printf("  wrote %s/ [%.2f s, beside the survey]\n", writing_.dir.c_str(), seconds);
   std::fflush(stdout);
 }
 

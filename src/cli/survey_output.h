@@ -23,10 +23,9 @@ class SurveyOutput : public SurveyObserver {
 
   void stage_done(SurveyStage stage, const ScanRecord& scan) override;
   void candidates_scored(std::size_t done, std::size_t total) override;
-  // Keeps the scan's survey.json record and writes scan_NN/: its OctoMap files at once, the
-  // rest on a thread of its own beside the next scan's stages up to its update
-  // (map_changing); a write that fails there throws from map_changing, or from
-  // write_survey_json.
+  // Keeps the scan's survey.json record and writes scan_NN/ on a thread of its own beside
+  // the next scan's stages up to its update (map_changing); a write that fails there
+  // throws from map_changing, or from write_survey_json.
   void scan_done(const ScanRecord& scan, const SurveyMap& map) override;
   // Waits for scan_NN/ to be written and says so.
   void map_changing() override;
@@ -48,15 +47,12 @@ class SurveyOutput : public SurveyObserver {
   std::vector<nlohmann::json> records_;
   std::vector<std::vector<Point3>> routes_;  // the robot's drives so far, for the slices
   nlohmann::json failures_ = nlohmann::json::array();
-  // The scan_NN/ being written: its scan and folder, and the seconds of its two parts
-  // (the future holds the background part's error, if any).
+  // The scan_NN/ being written: its scan and folder, and the seconds it took (the future
+  // holds the write's error, if any).
   struct PendingWrite {
-    struct Seconds {
-      double now = 0, background = 0;
-    };
     std::size_t index = 0;
     std::string dir;
-    std::future<Seconds> seconds;
+    std::future<double> seconds;
   };
   PendingWrite writing_;
 };

@@ -32,6 +32,15 @@ std::unique_ptr<octomap::ColorOcTree> to_color_octree(const SemiOcTree& tree,
 std::unique_ptr<octomap::OcTree> to_occupancy_octree(const SemiOcTree& tree,
                                                      const std::vector<LeafMark>& marks = {});
 
+// The files of those two trees, written from the map without building them: the same
+// bytes as write_tree_file(*to_color_octree(tree, marks)) and
+// write_binary_file(*to_occupancy_octree(tree, marks)), in one walk of the map's nodes
+// and a few bytes a node. Atomic (write_file_atomically); FileError on failure.
+void write_color_octree_file(const SemiOcTree& tree, const std::vector<LeafMark>& marks,
+                             const std::string& path);
+void write_occupancy_binary_file(const SemiOcTree& tree, const std::vector<LeafMark>& marks,
+                                 const std::string& path);
+
 struct PlyOptions {
   bool include_unknown = false;  // unknown octants are skipped by default
 };

@@ -48,6 +48,11 @@ void write_file_atomically(const std::string& path,
 // writer) whose process PID is not running. Nothing else; never throws.
 // Returns how many were removed.
 std::size_t remove_stale_temporaries(const std::string& dir);
+// The lines OctoMap writes before a tree's nodes: AbstractOcTree::write's for a .ot
+// file of `type`, and the .bt header (writeBinaryConst's, with a comment of ours).
+void write_ot_header(std::ostream& s, const std::string& type, std::size_t size, double resolution);
+void write_bt_header(std::ostream& s, std::size_t size, double resolution);
+
 // .ot of any tree type (the tree is not modified: no pruning).
 void write_tree_file(const octomap::AbstractOcTree& tree, const std::string& path);
 // .bt occupancy file (OctoMap's writeBinaryConst: the tree is not pruned).
