@@ -303,6 +303,11 @@ bool first_met(RecentKeys<std::uint8_t>& recent, std::uint64_t key) {
 // Fewer points than this a thread are not worth starting one for.
 constexpr std::size_t kMinThreadShare = std::size_t(1) << 16;
 
+// The part of a count (of `parts`) a key falls in.
+std::size_t part_of(std::uint64_t key, std::uint64_t parts) {
+  return std::size_t((key * 0x9E3779B97F4A7C15ull >> 32) % parts);
+}
+
 // count_cells over the points `each_point` streams: each_point(begin, end, f) calls
 // f(i, q) for each point q, at position i, of the positions [begin, end) of `size`, in
 // order, and stops when f returns false. Contiguous shares of the positions are counted on
@@ -313,38 +318,54 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
                            std::size_t cap, unsigned threads) {
   // One table of at most cap + 1 keys a worker first; past that (in a table or in their
   // union), the parts are as many as keep each table near the cap, from the share of the
-  // points read when a table filled (a scan's points sweep its surfaces in order).
+  // points read when a table filled (a scan's points sweep its surfaces in order). One
+  // worker alone takes two tables, its keys split between them by their hash (the
+  // memory two workers take): a count up to twice the cap (a trial spacing much finer
+  // than the target's) then takes one pass, not a pass and three parts.
   cap = std::max<std::size_t>(cap, 1);
   const double inv = 1.0 / spacing;
   const std::size_t workers =
       std::max<std::size_t>(1, std::min<std::size_t>(threads, size / kMinThreadShare));
+  const std::size_t split = workers == 1 ? 2 : 1;  // tables a worker
   double estimate = 0;  // cells in all, extrapolated from the tables' fill
   {
-    std::vector<PackedKeyMap<std::uint8_t>> cells(workers);
+    std::vector<PackedKeyMap<std::uint8_t>> cells(workers * split);
     std::vector<double> share_read(workers, 1.0);  // of the worker's positions, when it stopped
     detail::parallel_for(workers, unsigned(workers), 1, [&](std::size_t w, unsigned) {
       const std::size_t begin = size * w / workers, end = size * (w + 1) / workers;
-      PackedKeyMap<std::uint8_t>& table = cells[w];
-      table.reserve(std::min(end - begin, cap + 1));
-      BatchedInsert batch(table);
+      PackedKeyMap<std::uint8_t>* tables = &cells[w * split];
+      std::vector<BatchedInsert> batches;
+      for (std::size_t t = 0; t < split; ++t) {
+        tables[t].reserve(std::min(end - begin, cap + 1));
+        batches.emplace_back(tables[t]);
+      }
       RecentKeys<std::uint8_t> recent;
-      auto counted = [&] { return table.size() <= cap; };
+      auto counted = [&] {
+        for (std::size_t t = 0; t < split; ++t)
+          if (tables[t].size() > cap) return false;
+        return true;
+      };
       std::size_t last = begin;  // the position of the last point read
       bool more = true;
       each_point(begin, end, [&](std::size_t i, const pcl::PointXYZ& q) {
         last = i;
         if (!finite(q)) return true;
         const std::uint64_t k = cell_key(q, inv);
-        return !first_met(recent, k) || (more = batch.add(k, counted));
+        return !first_met(recent, k) ||
+               (more = batches[split == 1 ? 0 : part_of(k, split)].add(k, counted));
       });
-      if (more) batch.flush(counted);
+      for (BatchedInsert& batch : batches)
+        if (more) more = batch.flush(counted);
       if (!more) share_read[w] = double(last + 1 - begin) / double(end - begin);
     });
     bool over = false;
-    for (std::size_t w = 0; w < workers; ++w) {
-      over = over || cells[w].size() > cap;
-      estimate += double(cells[w].size()) / std::max(share_read[w], 1e-9);
+    for (std::size_t t = 0; t < cells.size(); ++t) {
+      over = over || cells[t].size() > cap;
+      estimate += double(cells[t].size()) / std::max(share_read[t / split], 1e-9);
     }
+    if (!over && split > 1)  // one worker's tables: their keys apart
+      return std::accumulate(cells.begin(), cells.end(), std::size_t(0),
+                             [](std::size_t n, const auto& t) { return n + t.size(); });
     for (std::size_t w = 1; w < workers && !over; ++w) {
       cells[w].for_each_key([&](std::uint64_t k) {
         cells[0].insert(k);
@@ -365,8 +386,7 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
     each_point(0, size, [&](std::size_t, const pcl::PointXYZ& q) {
       if (!finite(q)) return true;
       const std::uint64_t k = cell_key(q, inv);
-      return (k * 0x9E3779B97F4A7C15ull >> 32) % parts != part || !first_met(recent, k) ||
-             batch.add(k, go_on);
+      return part_of(k, parts) != part || !first_met(recent, k) || batch.add(k, go_on);
     });
     batch.flush(go_on);
     counts[part] = cells.size();
