@@ -311,14 +311,15 @@ std::size_t part_of(std::uint64_t key, std::uint64_t parts) {
 // count_cells over the points `each_point` streams: each_point(begin, end, f) calls
 // f(i, q) for each point q, at position i, of the positions [begin, end) of `size`, in
 // order, and stops when f returns false. Contiguous shares of the positions are counted on
-// `threads` workers, each into a table of its own, and the tables merged: the count is exact
-// whatever the threads.
+// `threads` workers, each into a table of its own, and the keys of their union counted:
+// the count is exact whatever the threads.
 template <class EachPoint>
 std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double spacing,
                            std::size_t cap, unsigned threads) {
-  // One table of at most cap + 1 keys a worker first; past that (in a table or in their
-  // union), the parts are as many as keep each table near the cap, from the share of the
-  // points read when a table filled (a scan's points sweep its surfaces in order). One
+  // One table of at most cap + 1 keys a worker first (their union counted by looking
+  // keys up); past that, the parts are as many as keep each table near the cap, from the
+  // share of the points read when a table filled (a scan's points sweep its surfaces in
+  // order). One
   // worker alone takes two tables, its keys split between them by their hash (the
   // memory two workers take): a count up to twice the cap (a trial spacing much finer
   // than the target's) then takes one pass, not a pass and three parts.
@@ -366,14 +367,19 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
     if (!over && split > 1)  // one worker's tables: their keys apart
       return std::accumulate(cells.begin(), cells.end(), std::size_t(0),
                              [](std::size_t n, const auto& t) { return n + t.size(); });
-    for (std::size_t w = 1; w < workers && !over; ++w) {
-      cells[w].for_each_key([&](std::uint64_t k) {
-        cells[0].insert(k);
-        return !(over = cells[0].size() > cap);
-      });
-      cells[w].clear();
+    if (!over) {
+      // The workers' union: each table's keys that no table before it holds (looked up,
+      // not inserted: no table grows).
+      std::size_t n = cells[0].size();
+      for (std::size_t w = 1; w < workers; ++w)
+        cells[w].for_each_key([&](std::uint64_t k) {
+          bool before = false;
+          for (std::size_t v = 0; v < w && !before; ++v) before = cells[v].find(k) != nullptr;
+          n += !before;
+          return true;
+        });
+      return n;
     }
-    if (!over) return cells[0].size();
   }
   const std::uint64_t parts =
       std::max<std::uint64_t>(2, std::uint64_t(std::ceil(1.25 * estimate / double(cap))));
