@@ -420,18 +420,19 @@ CellThinning::CellThinning(double spacing) : inv_(1.0 / spacing), kept_(new Clou
   kept_->is_dense = true;
 }
 
+float CellThinning::centre_offset2(const pcl::PointXYZ& p) const {
+  auto d = [&](float v) {
+    const double t = double(v) * inv_;
+    return t - double(floor_to_int(t)) - 0.5;
+  };
+  return float(d(p.x) * d(p.x) + d(p.y) * d(p.y) + d(p.z) * d(p.z));
+}
+
 void CellThinning::add(const pcl::PointXYZ& q) {
   // Per cell, the index of its point in kept_ and that point's squared distance from the
   // cell's centre (in cells); a point nearer the centre replaces it (PCL's UniformSampling
   // keeps the same points, at three times the time: docs/data-flow.md, "Decimation").
   if (!finite(q)) return;
-  auto centre_offset2 = [&](const pcl::PointXYZ& p) {
-    auto d = [&](float v) {
-      const double t = double(v) * inv_;
-      return t - double(floor_to_int(t)) - 0.5;
-    };
-    return float(d(p.x) * d(p.x) + d(p.y) * d(p.y) + d(p.z) * d(p.z));
-  };
   // A cell's index never changes once given, so recent_ may answer for slot_.
   Cloud& kept = *kept_;
   const std::uint64_t key = cell_key(q, inv_);
@@ -462,12 +463,37 @@ void CellThinning::add(const Cloud& points) {
 Cloud::Ptr CellThinning::release() {
   Cloud::Ptr out = std::move(kept_);
   out->points.shrink_to_fit();  // grown by doubling: up to twice what it holds
+  empty();
+  return out;
+}
+
+void CellThinning::empty() {
   kept_.reset(new Cloud);
   kept_->is_dense = true;
   slot_.clear();
   recent_.forget_all();
   offset2_ = {};
-  return out;
+}
+
+void CellThinning::release_after(Cloud& earlier) {
+  // Each of earlier's points is the first of its cell in the union's order, so it stays
+  // unless this thinning's point of that cell is strictly nearer the centre (add keeps the
+  // earlier on ties); the cells earlier holds are taken off what follows it.
+  Cloud& kept = *kept_;
+  std::vector<std::uint8_t> taken(kept.size(), 0);
+  std::size_t both = 0;
+  for (pcl::PointXYZ& p : earlier.points) {
+    if (!finite(p)) continue;
+    const std::uint32_t* slot = slot_.find(cell_key(p, inv_));
+    if (!slot) continue;
+    taken[*slot] = 1;
+    ++both;
+    if (offset2_[*slot] < centre_offset2(p)) p = kept[*slot];
+  }
+  earlier.reserve(earlier.size() + kept.size() - both);
+  for (std::size_t i = 0; i < kept.size(); ++i)
+    if (!taken[i]) earlier.push_back(kept[i]);
+  empty();
 }
 
 Cloud::Ptr decimate(const Cloud& cloud, double spacing) {

@@ -324,6 +324,32 @@ TEST(Preprocess, ThinningCloudByCloudEqualsDecimatingTheirUnion) {
     ASSERT_TRUE(p.x == q.x && p.y == q.y && p.z == q.z) << i;
   }
   EXPECT_THROW(CellThinning(0.0), std::invalid_argument);
+
+  // A thinned cloud and then more points, in place (the survey's merged cloud): the same
+  // points in the same order, some of the thinned cloud's replaced by nearer ones (and on
+  // ties, kept: a point of b placed exactly on one of a's stays out), and b's new cells
+  // after them.
+  Cloud thinned_a = *decimate(*a, 0.04);
+  Cloud b_ties = *b;
+  for (std::size_t i = 0; i < thinned_a.size(); i += 9) b_ties.push_back(thinned_a[i]);
+  Cloud both_ties = *a;
+  both_ties += b_ties;
+  const Cloud::Ptr union_thinned = decimate(both_ties, 0.04);
+  CellThinning later(0.04);
+  later.add(b_ties);
+  const Cloud before = thinned_a;
+  later.release_after(thinned_a);
+  ASSERT_EQ(thinned_a.size(), union_thinned->size());
+  std::size_t replaced = 0;
+  for (std::size_t i = 0; i < thinned_a.size(); ++i) {
+    const auto &p = thinned_a[i], &q = (*union_thinned)[i];
+    ASSERT_TRUE(p.x == q.x && p.y == q.y && p.z == q.z) << i;
+    if (i < before.size()) replaced += !(p.x == before[i].x && p.y == before[i].y);
+  }
+  EXPECT_GT(replaced, 0u);
+  EXPECT_GT(thinned_a.size(), before.size());
+  EXPECT_EQ(thinned_a.width, thinned_a.size());
+  EXPECT_TRUE(later.cloud().empty());
 }
 
 TEST(Preprocess, ClearErrors) {

@@ -112,9 +112,19 @@ class CellThinning {
   void add(const pcl::PointXYZ& point);  // one point (a non-finite one is skipped)
   const Cloud& cloud() const { return *kept_; }
   Cloud::Ptr release();  // the kept cloud, handed over (the thinning is empty after)
+  // What thinning `earlier` and then the points added here keeps, written into `earlier`
+  // in place. `earlier` must hold one point per cell of this spacing, in the order their
+  // cells were first met (a thinning's cloud, as release() gives it): its points stay
+  // where they are, each replaced by the point added here nearest its cell's centre if
+  // that one is nearer, and the cells only added here follow in their order. `earlier`
+  // is read once, its cells looked up in this thinning's table (no table of its own);
+  // the thinning is empty after.
+  void release_after(Cloud& earlier);
   double spacing() const { return 1.0 / inv_; }
 
  private:
+  float centre_offset2(const pcl::PointXYZ& p) const;  // squared, in cells
+  void empty();                                        // as constructed
   double inv_;
   PackedKeyMap<std::uint32_t> slot_;  // cell → index of its point in kept_
   RecentKeys<std::uint32_t> recent_;  // the cells of the last points, in front of slot_
