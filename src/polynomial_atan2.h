@@ -21,15 +21,20 @@ inline double polynomial_atan2(double y, double x) {
   // atan(t), t ∈ [0, 1]: above tan(π/8) through atan(t) = π/4 + atan((t − 1) / (t + 1)),
   // so that the series runs on |s| ≤ tan(π/8) ≈ 0.4142, where its terms up to s^17 leave
   // out less than 0.4143^19 / 19 < 3e-9 (an alternating series: at most its first term).
-  double s = small / big, base = 0.0;
-  if (s > 0.41421356237309503) {
-    s = (s - 1.0) / (s + 1.0);
+  // (t − 1) / (t + 1) with t = small / big is (small − big) / (small + big): one division.
+  double s, base = 0.0;
+  if (small > 0.41421356237309503 * big) {
+    s = (small - big) / (small + big);
     base = M_PI / 4;
+  } else {
+    s = small / big;
   }
-  const double s2 = s * s;
-  double series = 1.0 / 17;
-  for (const double c : {-1.0 / 15, 1.0 / 13, -1.0 / 11, 1.0 / 9, -1.0 / 7, 1.0 / 5, -1.0 / 3, 1.0})
-    series = c + s2 * series;
+  // 1 − u/3 + u²/5 − … + u⁸/17 in u = s², by pairs (Estrin's scheme: a chain of 4
+  // dependent steps, not Horner's 8; the same bound, rounding aside).
+  const double u = s * s, u2 = u * u, u4 = u2 * u2;
+  const double p01 = 1.0 - u * (1.0 / 3), p23 = 1.0 / 5 - u * (1.0 / 7);
+  const double p45 = 1.0 / 9 - u * (1.0 / 11), p67 = 1.0 / 13 - u * (1.0 / 15);
+  const double series = (p01 + u2 * p23) + u4 * ((p45 + u2 * p67) + u4 * (1.0 / 17));
   double a = base + s * series;
   if (ay > ax) a = M_PI / 2 - a;
   if (x < 0) a = M_PI - a;

@@ -200,26 +200,40 @@ Eigen::Vector3d refine_normal(const Cloud& cloud, const HorizontalPlane& plane, 
   return n.z() < 0 ? -n : n;
 }
 
-// Mean and σ of the z values near `guess`, re-centred a few times (a Gaussian
+// What fitting a peak near `guess` starts from: the heights near it (within `near`), in
+// their order, and their histogram over the search window. Fed one height at a time, so
+// that one pass over a scan's heights serves the floor's and the ceiling's.
+struct PeakStart {
+  PeakStart(double guess, const PreprocessParams& p)
+      : guess(guess),
+        lo(guess - p.peak_window),
+        near(3 * p.peak_window),
+        bin(p.histogram_bin),
+        hist(std::size_t(std::max(1, int(std::ceil(2 * p.peak_window / p.histogram_bin)))), 0) {}
+  void add(float v) {
+    if (!(std::fabs(double(v) - guess) <= near)) return;
+    z.push_back(v);
+    const int b = int(std::floor((v - lo) / bin));
+    if (b >= 0 && b < int(hist.size())) ++hist[std::size_t(b)];
+  }
+  double guess, lo, near, bin;
+  std::vector<std::size_t> hist;
+  std::vector<float> z;
+};
+
+// Mean and σ of the z values near the start's guess, re-centred a few times (a Gaussian
 // fitted to one peak of the z histogram by its moments). each_height(f) calls f(z) for
 // every height, in order (a scan's levelled heights are streamed, not stored).
 template <class EachHeight>
-HeightPeak fit_peak(const EachHeight& each_height, double guess, const PreprocessParams& p) {
-  // Histogram mode within the search window first: the peak itself.
-  const int nb = std::max(1, int(std::ceil(2 * p.peak_window / p.histogram_bin)));
-  std::vector<std::size_t> hist(std::size_t(nb), 0);
-  const double lo = guess - p.peak_window;
-  // The heights near the guess (within `near` of it), in their order: each pass below
-  // reads these instead of all of a scan's millions while its window lies within them
-  // (always, on a peak), the same values in the same order, so the same sums.
-  const double near = 3 * p.peak_window;
-  std::vector<float> z;
-  each_height([&](float v) {
-    if (!(std::fabs(double(v) - guess) <= near)) return;
-    z.push_back(v);
-    const int b = int(std::floor((v - lo) / p.histogram_bin));
-    if (b >= 0 && b < nb) ++hist[std::size_t(b)];
-  });
+HeightPeak fit_peak(const PeakStart& start, const EachHeight& each_height,
+                    const PreprocessParams& p) {
+  // Histogram mode within the search window first: the peak itself. The heights near the
+  // guess: each pass below reads these instead of all of a scan's millions while its
+  // window lies within them (always, on a peak), the same values in the same order, so
+  // the same sums.
+  const std::vector<std::size_t>& hist = start.hist;
+  const std::vector<float>& z = start.z;
+  const double guess = start.guess, lo = start.lo, near = start.near;
   const auto mode = std::max_element(hist.begin(), hist.end()) - hist.begin();
   HeightPeak peak;
   peak.center = lo + (double(mode) + 0.5) * p.histogram_bin;
@@ -604,12 +618,18 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     for (std::size_t i = 0; i < input.size(); ++i) f(levelled(i).z);
   };
   {
+    // Both peaks' starts from one pass over the heights.
     const Eigen::Vector3d on_floor = T * Eigen::Vector3d(c.x(), c.y(), lowest->height_at(c));
-    r.floor = fit_peak(each_height, on_floor.z(), p);
+    std::vector<PeakStart> starts{PeakStart(on_floor.z(), p)};
+    if (r.ceiling_found)
+      starts.emplace_back((T * Eigen::Vector3d(c.x(), c.y(), highest->height_at(c))).z(), p);
+    each_height([&](float v) {
+      for (PeakStart& start : starts) start.add(v);
+    });
+    r.floor = fit_peak(starts[0], each_height, p);
     r.floor.plane_inliers = lowest->inliers;
     if (r.ceiling_found) {
-      const Eigen::Vector3d on_ceiling = T * Eigen::Vector3d(c.x(), c.y(), highest->height_at(c));
-      r.ceiling = fit_peak(each_height, on_ceiling.z(), p);
+      r.ceiling = fit_peak(starts[1], each_height, p);
       r.ceiling.plane_inliers = highest->inliers;
     }
   }
