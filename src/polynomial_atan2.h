@@ -16,8 +16,15 @@ constexpr double kPolynomialAtan2Error = 1e-7;
 // for x < 0, −0 for x > 0); both arguments zero: std::atan2's own value.
 inline double polynomial_atan2(double y, double x) {
   const double ax = std::fabs(x), ay = std::fabs(y);
-  const double big = std::max(ax, ay), small = std::min(ax, ay);
+  double big = std::max(ax, ay), small = std::min(ax, ay);
   if (!(big > 0)) return std::atan2(y, x);
+  // Only the ratio counts: scaled by a power of two (exactly), small + big cannot overflow
+  // and tan(π/8)·big is not rounded among subnormals.
+  if (big > 0x1p1000) {
+    small *= 0x1p-8, big *= 0x1p-8;
+  } else if (big < 0x1p-900) {
+    small *= 0x1p100, big *= 0x1p100;
+  }
   // atan(t), t ∈ [0, 1]: above tan(π/8) through atan(t) = π/4 + atan((t − 1) / (t + 1)),
   // so that the series runs on |s| ≤ tan(π/8) ≈ 0.4142, where its terms up to s^17 leave
   // out less than 0.4143^19 / 19 < 3e-9 (an alternating series: at most its first term).

@@ -495,16 +495,14 @@ void CellThinning::release_after(Cloud& earlier) {
   // earlier on ties); the cells earlier holds are taken off what follows it.
   Cloud& kept = *kept_;
   std::vector<std::uint8_t> taken(kept.size(), 0);
-  std::size_t both = 0;
   for (pcl::PointXYZ& p : earlier.points) {
     if (!finite(p)) continue;
     const std::uint32_t* slot = slot_.find(cell_key(p, inv_));
     if (!slot) continue;
     taken[*slot] = 1;
-    ++both;
     if (offset2_[*slot] < centre_offset2(p)) p = kept[*slot];
   }
-  earlier.reserve(earlier.size() + kept.size() - both);
+  earlier.reserve(earlier.size() + std::size_t(std::count(taken.begin(), taken.end(), 0)));
   for (std::size_t i = 0; i < kept.size(); ++i)
     if (!taken[i]) earlier.push_back(kept[i]);
   empty();

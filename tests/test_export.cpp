@@ -153,9 +153,9 @@ std::string file_bytes(const fs::path& path) {
 
 // The .ot and .bt written straight from the map hold the bytes OctoMap writes for the trees
 // to_color_octree and to_occupancy_octree build: on empty maps, the sample tree and random
-// maps, with marks in occupied leaves, inside coarse and split octants of every label
-// (occluded: exported in colour, unknown in the .bt), in unknown space, outside the map,
-// and two on one leaf (the later wins).
+// maps, with marks of several labels (unknown ones are not drawn; occluded ones not in the
+// .bt) in occupied leaves, inside coarse and split octants of every label, in unknown
+// space, outside the map, and two on one leaf (the later wins).
 TEST(Export, FilesWrittenFromTheMapAreTheBytesOctoMapWrites) {
   const auto dir = testing::temp_dir("stream_export");
   std::vector<std::unique_ptr<SemiOcTree>> trees;
@@ -190,7 +190,9 @@ TEST(Export, FilesWrittenFromTheMapAreTheBytesOctoMapWrites) {
     std::size_t n = 0;
     t.for_each_octant([&](const Octant& o) {
       if (n++ % 7 != 0) return;
-      mark(o.center, n % 2 ? Label::kScan : Label::kNbv);
+      constexpr Label kMarkLabels[] = {Label::kScan,     Label::kNbv,      Label::kUnknown,
+                                       Label::kOccluded, Label::kOccupied, Label::kEmpty};
+      mark(o.center, kMarkLabels[n % 6]);
       mark(Point3(o.center.x - o.size / 2 + 0.01, o.center.y - o.size / 2 + 0.01,
                   o.center.z - o.size / 2 + 0.01),
            Label::kNbv);
@@ -198,6 +200,9 @@ TEST(Export, FilesWrittenFromTheMapAreTheBytesOctoMapWrites) {
     mark({5.0, 5.0, 5.0}, Label::kScan);  // outside every coarse voxel
     mark({0.6, 0.6, 0.3}, Label::kScan);
     mark({0.6, 0.6, 0.3}, Label::kNbv);  // the later wins
+    mark({0.2, 0.2, 0.2}, Label::kScan);
+    mark({0.2, 0.2, 0.2}, Label::kUnknown);    // not drawn: the scan stays
+    mark({-3.0, -3.0, 1.0}, Label::kUnknown);  // outside the map, not drawn
     mark_sets.push_back(marks);
     for (std::size_t m = 0; m < mark_sets.size(); ++m) {
       const std::string name = std::to_string(i) + "_" + std::to_string(m);

@@ -494,6 +494,13 @@ TEST(Occlusion, PolynomialAtan2StaysWithinItsBound) {
     const double x = unit(rng) * std::pow(10.0, exponent(rng));
     worst = std::max(worst, std::abs(detail::polynomial_atan2(y, x) - std::atan2(y, x)));
   }
+  // Near the largest and smallest doubles (sums that overflow, subnormals).
+  for (const auto& [a, b] : std::vector<std::pair<double, double>>{
+           {1e308, 1.7e308}, {1.7e308, 1e308}, {4.9e-324, 9.9e-324}, {2e-310, 4.4e-310}})
+    for (double sy : {-1.0, 1.0})
+      for (double sx : {-1.0, 1.0})
+        worst = std::max(
+            worst, std::abs(detail::polynomial_atan2(sy * a, sx * b) - std::atan2(sy * a, sx * b)));
   // Near tan(π/8), where the series switches, and along the axes and diagonals.
   for (double t : {0.41421356237309503, 0.4142135623730951, 1.0, 0.0, 1e-300}) {
     for (double sy : {-1.0, 1.0})

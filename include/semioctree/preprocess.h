@@ -136,7 +136,8 @@ class CellThinning {
 // finer than the points' on a scan of millions) the keys are split by their hash and
 // counted part by part, one pass over the points a part. Non-finite points are skipped.
 // Contiguous shares of the cloud are counted on `threads` workers (0: one per core), a
-// table of up to `cap` keys each, and their tables merged.
+// table of up to `cap` keys each (one worker alone: two, its keys split between them by
+// hash), and the keys of their union counted by looking them up (no table grows).
 std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap, unsigned threads = 1);
 
 }  // namespace semioctree

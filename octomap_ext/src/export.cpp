@@ -60,7 +60,7 @@ void place_octants_and_marks(const SemiOcTree& tree, const std::vector<LeafMark>
 // children down to the mark's leaf (the children take its label); a mark elsewhere hung
 // on a path of its own. `Policy` says which labels are exported and what a node stores:
 //   static bool exported(Label);
-//   Entry inner(const Summary children[8], unsigned mask);  // mask: children present
+//   Entry inner(const std::optional<Summary> children[8], unsigned mask);  // mask: present
 //   Summary summary_of_inner(const Entry&), summary_of_leaf(Label);
 //   bool writes_leaves: whether a leaf has an entry of its own (.ot) or not (.bt)
 template <class Policy>
@@ -244,6 +244,7 @@ std::unique_ptr<octomap::ColorOcTree> to_color_octree(const SemiOcTree& tree,
   auto out = std::make_unique<OctantPlacer<octomap::ColorOcTree>>(tree.leaf_size());
   const float occupied = out->getClampingThresMaxLog();
   place_octants_and_marks(tree, marks, [&](const octomap::OcTreeKey& key, unsigned depth, Label l) {
+    if (l == Label::kUnknown) return;  // a mark labelled unknown: nothing to draw
     auto* node = out->place(key, depth);
     node->setLogOdds(occupied);
     const Rgb c = label_color(l);

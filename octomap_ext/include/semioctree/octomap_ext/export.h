@@ -26,7 +26,8 @@ struct LeafMark {
   Label label = Label::kUnknown;
 };
 
-// Later marks win where they meet.
+// Later marks win where they meet; a mark labelled unknown is not drawn (as unknown
+// octants are not exported).
 std::unique_ptr<octomap::ColorOcTree> to_color_octree(const SemiOcTree& tree,
                                                       const std::vector<LeafMark>& marks = {});
 std::unique_ptr<octomap::OcTree> to_occupancy_octree(const SemiOcTree& tree,
