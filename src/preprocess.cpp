@@ -333,10 +333,9 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
   // One table of at most cap + 1 keys a worker first (their union counted by looking
   // keys up); past that, the parts are as many as keep each table near the cap, from the
   // share of the points read when a table filled (a scan's points sweep its surfaces in
-  // order). One
-  // worker alone takes two tables, its keys split between them by their hash (the
-  // memory two workers take): a count up to twice the cap (a trial spacing much finer
-  // than the target's) then takes one pass, not a pass and three parts.
+  // order). One worker alone takes two tables, its keys split between them by their hash
+  // (the memory two workers take): a count up to twice the cap (a trial spacing much
+  // finer than the target's) then takes one pass, not a pass and three parts.
   cap = std::max<std::size_t>(cap, 1);
   const double inv = 1.0 / spacing;
   const std::size_t workers =

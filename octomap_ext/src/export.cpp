@@ -62,7 +62,8 @@ void place_octants_and_marks(const SemiOcTree& tree, const std::vector<LeafMark>
 //   static bool exported(Label);
 //   Entry inner(const std::optional<Summary> children[8], unsigned mask);  // mask: present
 //   Summary summary_of_inner(const Entry&), summary_of_leaf(Label);
-//   bool writes_leaves: whether a leaf has an entry of its own (.ot) or not (.bt)
+//   bool writes_leaves: whether a leaf has an entry of its own, Entry leaf(Label) (.ot),
+//   or not (.bt)
 template <class Policy>
 class ExportWalk {
  public:
