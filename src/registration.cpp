@@ -36,6 +36,32 @@ class Icp : public pcl::IterativeClosestPoint<PointN, PointN, double> {
   int iterations() const { return nr_iterations_; }
 };
 
+// A point's surface normal (needed by the point-to-plane error): the smallest
+// eigenvector of the covariance of its (up to) 12 nearest neighbours in `tree` within
+// `radius`. A point with fewer than 3 such neighbours (an isolated return) keeps a zero
+// normal: it then adds nothing to the point-to-plane error. Returns whether it got one.
+// `nn` and `d2` are the caller's buffers (room for 12 each).
+constexpr int kNormalNeighbours = 12;
+bool fit_normal(PointN& q, const detail::KdTreeN& tree, double radius, pcl::Indices& nn,
+                float* d2) {
+  nn.resize(kNormalNeighbours);
+  const int found = tree.nearest_within(q, kNormalNeighbours, radius, nn.data(), d2);
+  nn.resize(std::size_t(found));
+  if (found < 3) return false;
+  Eigen::Matrix3f cov;
+  Eigen::Vector4f centroid;
+  if (pcl::computeMeanAndCovarianceMatrix(*tree.getInputCloud(), nn, cov, centroid) < 3)
+    return false;
+  float eigenvalue;
+  Eigen::Vector3f n;
+  pcl::eigen33(cov, eigenvalue, n);
+  if (!n.allFinite() || n.squaredNorm() < 0.5f) return false;
+  q.normal_x = n.x();
+  q.normal_y = n.y();
+  q.normal_z = n.z();
+  return true;
+}
+
 // The target's kd-tree as ICP's correspondence search. PCL's correspondence
 // estimation asks for the nearest neighbour of every source point and drops it
 // when farther than the correspondence distance; an unbounded search from a point
@@ -44,30 +70,56 @@ class Icp : public pcl::IterativeClosestPoint<PointN, PointN, double> {
 // correspondence distance gives the same correspondences, several times faster
 // on such points (a uniform-noise source: 0.64 → 0.23 s per iteration).
 //
+// The target's normals (and, with the facing known, their orientation) are fitted when
+// a search first meets a point, into the target cloud itself: ICP pairs a share of the
+// target's points, and reads the normals of those only (docs/registration.md, "What it
+// costs"). Each point's normal is its own, so they are the normals a pass over every
+// point gives. Searches are therefore not const in effect: one thread at a time.
+//
 // With the surfaces' facing known (SurfaceFacing), a source point with a normal pairs
 // with the nearest target point within the bound whose surface faces the same way (or
 // whose facing is unknown): the two faces of a wall are not confused.
 class BoundedKdTree : public detail::KdTreeN {
  public:
   using Ptr = pcl::shared_ptr<BoundedKdTree>;
+  // The target, whose normals are fitted within `radius` on demand (its normals zero
+  // until then), and its facing (may be null; `offset` shifts it back to the facing's
+  // frame). The cloud must outlive the tree.
+  BoundedKdTree(const CloudN::Ptr& target, double radius, const SurfaceFacing* facing,
+                const Eigen::Vector3d& offset)
+      : target_(target), radius_(radius), offset_(offset), state_(target->size(), kUnfitted) {
+    if (facing && facing->target_side) target_side_ = facing->target_side;
+    setInputCloud(target);
+  }
   void set_bound(double distance) { bound_ = distance; }
-  // Per target point: 1 if its normal is oriented (the side it was seen from), 0 if not.
-  void set_oriented(std::vector<std::uint8_t> oriented) { oriented_ = std::move(oriented); }
+  // The number of target points with a normal among the first that give `wanted` of
+  // them (all points when fewer have one).
+  std::size_t normals_up_to(std::size_t wanted) const {
+    std::size_t with_normal = 0;
+    for (std::size_t i = 0; i < state_.size() && with_normal < wanted; ++i)
+      if (prepare(int(i)) != kNoNormal) ++with_normal;
+    return with_normal;
+  }
   using detail::KdTreeN::nearestKSearch;
   int nearestKSearch(const PointN& point, int k, pcl::Indices& indices,
                      std::vector<float>& sqr_distances) const override {
-    if (k != 1 || !(bound_ > 0)) return KdTreeN::nearestKSearch(point, k, indices, sqr_distances);
+    if (k != 1 || !(bound_ > 0)) {
+      const int found = KdTreeN::nearestKSearch(point, k, indices, sqr_distances);
+      for (int i = 0; i < found; ++i) prepare(indices[std::size_t(i)]);
+      return found;
+    }
     const Eigen::Vector3f n = point.getNormalVector3fMap();
     // The nearest within the bound, or the nearest few, nearest first: the first on a
     // surface facing the same way.
     constexpr int kFacingCandidates = 8;
-    const bool facing = !(oriented_.empty() || n.squaredNorm() < 0.5f);  // (a NaN normal: facing)
+    const bool facing = !(!target_side_ || n.squaredNorm() < 0.5f);  // (a NaN normal: facing)
     int near[kFacingCandidates];
     float d2[kFacingCandidates];
     const int found = nearest_within(point, facing ? kFacingCandidates : 1, bound_, near, d2);
     for (int i = 0; i < found; ++i) {
-      const PointN& t = (*input_)[std::size_t(near[i])];
-      if (!facing || !oriented_[std::size_t(near[i])] || n.dot(t.getNormalVector3fMap()) > 0.0f) {
+      const State state = prepare(near[i]);
+      if (!facing || state != kOriented ||
+          n.dot((*input_)[std::size_t(near[i])].getNormalVector3fMap()) > 0.0f) {
         indices.assign(1, near[i]);
         sqr_distances.assign(1, d2[i]);
         return 1;
@@ -80,8 +132,31 @@ class BoundedKdTree : public detail::KdTreeN {
   }
 
  private:
+  enum State : std::uint8_t { kUnfitted, kNoNormal, kUnoriented, kOriented };
+  // Fits point i's normal (and orients it) the first time it is asked for.
+  State prepare(int i) const {
+    State& state = state_[std::size_t(i)];
+    if (state != kUnfitted) return state;
+    PointN& q = (*target_)[std::size_t(i)];
+    if (!fit_normal(q, *this, radius_, nn_, d2_)) return state = kNoNormal;
+    if (!target_side_) return state = kUnoriented;
+    // The side the surface was seen from: turned towards it, or left unoriented.
+    const Eigen::Vector3f n = q.getNormalVector3fMap();
+    const Eigen::Vector3d at = q.getVector3fMap().cast<double>() + offset_;
+    const int side = target_side_(at, n.cast<double>());
+    if (side == 0) return state = kUnoriented;
+    if (side < 0) q.getNormalVector3fMap() = -n;
+    return state = kOriented;
+  }
+
+  CloudN::Ptr target_;
+  double radius_;
+  Eigen::Vector3d offset_;
+  std::function<int(const Eigen::Vector3d&, const Eigen::Vector3d&)> target_side_;
   double bound_ = 0;
-  std::vector<std::uint8_t> oriented_;
+  mutable std::vector<State> state_;
+  mutable pcl::Indices nn_;  // fit_normal's buffers
+  mutable float d2_[kNormalNeighbours];
 };
 
 // Voxel-grid downsampling (one centroid per occupied voxel) of `in`, or of the points of
@@ -172,68 +247,23 @@ CloudN::Ptr shifted(const Cloud& in, const Eigen::Vector3d& offset) {
   return out;
 }
 
-// Surface normals of the target (needed by the point-to-plane error), in place:
-// the smallest eigenvector of the covariance of the (up to) 12 nearest
-// neighbours within `radius`. Points with fewer than 3 such neighbours (isolated
-// returns) keep a zero normal: they then add nothing to the point-to-plane error.
-// Returns the number of points given a normal. Each point's normal is its own: the same
-// on any number of `threads` (0: one per core).
-std::size_t estimate_normals(CloudN& cloud, const detail::KdTreeN& tree, double radius,
-                             unsigned threads) {
-  constexpr int k = 12;
+// The normals of every point of `cloud` (fit_normal), fitted to the points of `tree`, on
+// `threads` workers (0: one per core): each point's normal is its own, the same on any
+// number of threads.
+void estimate_normals(CloudN& cloud, const detail::KdTreeN& tree, double radius, unsigned threads) {
   constexpr std::size_t kChunk = 1024;
   const unsigned workers = detail::thread_count(threads);
   struct Scratch {
     pcl::Indices nn;
-    float d2[k];
-    std::size_t with_normal = 0;
+    float d2[kNormalNeighbours];
   };
   std::vector<Scratch> scratch(workers);
   detail::parallel_for(
       (cloud.size() + kChunk - 1) / kChunk, workers, 1, [&](std::size_t c, unsigned w) {
         Scratch& s = scratch[w];
-        for (std::size_t i = c * kChunk, end = std::min(cloud.size(), i + kChunk); i < end; ++i) {
-          PointN& q = cloud[i];
-          s.nn.resize(k);
-          const int found = tree.nearest_within(q, k, radius, s.nn.data(), s.d2);
-          s.nn.resize(std::size_t(found));
-          if (found < 3) continue;
-          Eigen::Matrix3f cov;
-          Eigen::Vector4f centroid;
-          if (pcl::computeMeanAndCovarianceMatrix(*tree.getInputCloud(), s.nn, cov, centroid) < 3)
-            continue;
-          float eigenvalue;
-          Eigen::Vector3f n;
-          pcl::eigen33(cov, eigenvalue, n);
-          if (!n.allFinite() || n.squaredNorm() < 0.5f) continue;
-          q.normal_x = n.x();
-          q.normal_y = n.y();
-          q.normal_z = n.z();
-          ++s.with_normal;
-        }
+        for (std::size_t i = c * kChunk, end = std::min(cloud.size(), i + kChunk); i < end; ++i)
+          fit_normal(cloud[i], tree, radius, s.nn, s.d2);
       });
-  std::size_t with_normal = 0;
-  for (const Scratch& s : scratch) with_normal += s.with_normal;
-  return with_normal;
-}
-
-// Orients the target's normals towards the side their surface was seen from
-// (SurfaceFacing::target_side; `offset` shifts the cloud back to the caller's frame).
-// Returns per point 1 if oriented, 0 if not.
-std::vector<std::uint8_t> orient_target(CloudN& cloud, const Eigen::Vector3d& offset,
-                                        const SurfaceFacing& facing) {
-  std::vector<std::uint8_t> oriented(cloud.size(), 0);
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    PointN& q = cloud[i];
-    Eigen::Vector3f n = q.getNormalVector3fMap();
-    if (n.squaredNorm() < 0.5f) continue;
-    const Eigen::Vector3d at = q.getVector3fMap().cast<double>() + offset;
-    const int side = facing.target_side(at, n.cast<double>());
-    if (side == 0) continue;
-    if (side < 0) q.getNormalVector3fMap() = -n;
-    oriented[i] = 1;
-  }
-  return oriented;
 }
 
 // Normals of `cloud` (estimate_normals within `radius`) turned towards `viewpoint`.
@@ -314,21 +344,20 @@ RegistrationResult register_scan(const Cloud& source, const Cloud& target,
   const Eigen::Vector3d offset(centroid.x(), centroid.y(), 0.0);
   const CloudN::Ptr src = shifted(*src_ds, offset);
   const CloudN::Ptr tgt = shifted(*tgt_ds, offset);
-  // One kd-tree over the target serves the normals, ICP and the final check.
-  const BoundedKdTree::Ptr tree(new BoundedKdTree);
-  tree->setInputCloud(tgt);
-  const std::size_t with_normal = estimate_normals(*tgt, *tree, 4.0 * p.voxel, p.threads);
+  // One kd-tree over the target serves the normals, ICP and the final check; it fits the
+  // target's normals as its searches meet them.
+  Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();
+  if (facing) viewpoint = (facing->source_viewpoint - offset).cast<float>();
+  const BoundedKdTree::Ptr tree(new BoundedKdTree(tgt, 4.0 * p.voxel, facing, offset));
+  const std::size_t with_normal = tree->normals_up_to(p.min_points);
   if (with_normal < p.min_points) {
     std::ostringstream m;
     m << "cannot register: only " << with_normal << " of " << tgt->size()
       << " target points have a surface normal (need at least " << p.min_points << ")";
     throw RegistrationError(m.str());
   }
-  // Which way the surfaces face: the target's from where they were seen, the source's
-  // towards its scanner (per stage, on that stage's sampling).
-  Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();
-  if (facing) viewpoint = (facing->source_viewpoint - offset).cast<float>();
-  if (facing && facing->target_side) tree->set_oriented(orient_target(*tgt, offset, *facing));
+  // Which way the surfaces face: the target's from where they were seen (as the tree fits
+  // them), the source's towards its scanner (per stage, on that stage's sampling).
   auto source_at = [&](const CloudN::Ptr& cloud, double voxel) {
     if (facing && facing->target_side) normals_facing(*cloud, 4.0 * voxel, viewpoint, p.threads);
     return cloud;

@@ -309,6 +309,34 @@ TEST(Registration, EmptyOrTinyCloudsFail) {
   EXPECT_THROW(register_scan(*target, *target, bad), std::invalid_argument);
 }
 
+// A target of isolated points beside one small patch of wall: only the patch's points
+// get a surface normal (3 neighbours within 4 voxels), too few for the point-to-plane
+// error. Refused, naming how many of the target's points have one.
+TEST(Registration, ATargetWithTooFewNormalsIsRefusedCountingThem) {
+  const Cloud::Ptr source = room(0.05, 11);
+  Cloud target;
+  for (int x = 0; x < 9; ++x)  // 0.3 m apart: no neighbour within 0.2 m
+    for (int y = 0; y < 7; ++y)
+      for (int z = 0; z < 4; ++z)
+        target.push_back(pcl::PointXYZ{0.3f + 0.9f * x, 0.3f + 0.9f * y, 0.4f + 0.7f * z});
+  for (int y = 0; y < 6; ++y)  // a patch of wall on x = 0.02, 0.06 m apart
+    for (int z = 0; z < 6; ++z)
+      target.push_back(pcl::PointXYZ{0.02f, 2.0f + 0.06f * y, 1.0f + 0.06f * z});
+  try {
+    register_scan(*source, target);
+    FAIL() << "a target of isolated points was registered";
+  } catch (const RegistrationError& e) {
+    const std::string what = e.what();
+    const auto at = what.find("only ");
+    ASSERT_NE(at, std::string::npos) << what;
+    EXPECT_NE(what.find("have a surface normal"), std::string::npos) << what;
+    unsigned with_normal = 0, points = 0;
+    ASSERT_EQ(std::sscanf(what.c_str() + at, "only %u of %u", &with_normal, &points), 2) << what;
+    EXPECT_EQ(points, 9u * 7u * 4u + 36u);
+    EXPECT_EQ(with_normal, 36u);  // the patch, and none of the isolated points
+  }
+}
+
 #ifdef SEMIOCTREE_HAVE_SIM
 
 using semioctree::testing::sanitized;
