@@ -557,6 +557,55 @@ TEST(Occlusion, ReturnDirectionsBinEachReturnWhereItsDirectionIsLookedUp) {
   EXPECT_EQ(missed, 0u) << "of " << 3 * directions.size() << " returns";
 }
 
+// may_see (the study's look-up, with the polynomial angles) answers as has and
+// behind_surface (std::atan2) do: over a scan whose returns lie at random ranges, for
+// points at random, on the edges of the degree bins, and on the edges of the depth bins.
+TEST(Occlusion, MaySeeAnswersAsHasAndBehindSurface) {
+  std::mt19937_64 rng(17);
+  std::normal_distribution<double> gauss;
+  std::uniform_real_distribution<double> range(0.7, 12.0), unit(0.0, 1.0);
+  auto at = [](double elevation_deg, double azimuth_deg, double r) {
+    const double el = elevation_deg * M_PI / 180, az = azimuth_deg * M_PI / 180;
+    return Eigen::Vector3d(r * std::cos(el) * std::cos(az), r * std::cos(el) * std::sin(az),
+                           r * std::sin(el));
+  };
+  Cloud scan;  // a patchy scan: a band of elevations, holes in azimuth
+  for (int i = 0; i < 1500000; ++i) {
+    const double el = -60 + 110 * unit(rng), az = -180 + 360 * unit(rng);
+    if (std::fmod(az + 180, 40.0) < 7) continue;
+    const Eigen::Vector3d p = at(el, az, range(rng));
+    scan.push_back(pcl::PointXYZ(float(p.x()), float(p.y()), float(p.z())));
+  }
+  ReturnDirections r;
+  r.add_scan(scan, Eigen::Matrix3d::Identity(), 1);
+  ASSERT_GT(r.depth_bins_per_degree(), 1);
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 200000; ++i)
+    points.push_back(range(rng) * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)).normalized());
+  const int k = r.depth_bins_per_degree();
+  for (int row = 0; row <= 180 * k; row += 3)  // row edges of the depth bins (and degrees)
+    for (double azimuth = -180; azimuth < 180; azimuth += 7.0 / k)
+      points.push_back(at(double(row) / k - 90, azimuth, range(rng)));
+  for (int elevation = -89; elevation < 90; elevation += 2)  // column edges of the degrees
+    for (int column = 0; column < 360; column += 5)
+      points.push_back(
+          at(elevation + 0.5,
+             -180 + column * 360.0 /
+                        std::max(1L, std::lround(360 * std::cos((elevation + 0.5) * M_PI / 180))),
+             range(rng)));
+  std::size_t differ = 0, seen = 0;
+  for (const Eigen::Vector3d& p : points) {
+    const bool expected =
+        r.has(p.x(), p.y(), p.z()) && !r.behind_surface(p.x(), p.y(), p.z(), 0.05);
+    const bool got = r.may_see(p.x(), p.y(), p.z(), 0.05);
+    differ += got != expected;
+    seen += got;
+  }
+  EXPECT_EQ(differ, 0u) << "of " << points.size() << " points";
+  EXPECT_GT(seen, points.size() / 10);  // neither answer is always the same
+  EXPECT_LT(seen, points.size() * 9 / 10);
+}
+
 TEST(Occlusion, ReturnDirectionsOpenAboveTheHighestReturnOfEachAzimuth) {
   const auto deg = [](double a_deg, double e_deg) {
     const double a = a_deg * M_PI / 180, e = e_deg * M_PI / 180;
