@@ -327,9 +327,11 @@ std::size_t part_of(std::uint64_t key, std::uint64_t parts) {
 // order, and stops when f returns false. Contiguous shares of the positions are counted on
 // `threads` workers, each into a table of its own, and the keys of their union counted:
 // the count is exact whatever the threads.
+// `tables`: the tables of an earlier count to fill again (their keys forgotten), or none.
 template <class EachPoint>
 std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double spacing,
-                           std::size_t cap, unsigned threads) {
+                           std::size_t cap, unsigned threads,
+                           std::vector<PackedKeyMap<std::uint8_t>>& tables) {
   // One table of at most cap + 1 keys a worker first (their union counted by looking
   // keys up); past that, the parts are as many as keep each table near the cap, from the
   // share of the points read when a table filled (a scan's points sweep its surfaces in
@@ -343,20 +345,22 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
   const std::size_t split = workers == 1 ? 2 : 1;  // tables a worker
   double estimate = 0;  // cells in all, extrapolated from the tables' fill
   {
-    std::vector<PackedKeyMap<std::uint8_t>> cells(workers * split);
+    std::vector<PackedKeyMap<std::uint8_t>>& cells = tables;
+    cells.resize(workers * split);
     std::vector<double> share_read(workers, 1.0);  // of the worker's positions, when it stopped
     detail::parallel_for(workers, unsigned(workers), 1, [&](std::size_t w, unsigned) {
       const std::size_t begin = size * w / workers, end = size * (w + 1) / workers;
-      PackedKeyMap<std::uint8_t>* tables = &cells[w * split];
+      PackedKeyMap<std::uint8_t>* own = &cells[w * split];
       std::vector<BatchedInsert> batches;
       for (std::size_t t = 0; t < split; ++t) {
-        tables[t].reserve(std::min(end - begin, cap + 1));
-        batches.emplace_back(tables[t]);
+        own[t].forget_keys();
+        own[t].reserve(std::min(end - begin, cap + 1));
+        batches.emplace_back(own[t]);
       }
       RecentKeys<std::uint8_t> recent;
       auto counted = [&] {
         for (std::size_t t = 0; t < split; ++t)
-          if (tables[t].size() > cap) return false;
+          if (own[t].size() > cap) return false;
         return true;
       };
       std::size_t last = begin;  // the position of the last point read
@@ -398,8 +402,11 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
       std::max<std::uint64_t>(2, std::uint64_t(std::ceil(1.25 * estimate / double(cap))));
   std::vector<std::size_t> counts(parts);
   auto go_on = [] { return true; };
-  detail::parallel_for(parts, unsigned(workers), 1, [&](std::size_t part, unsigned) {
-    PackedKeyMap<std::uint8_t> cells(cap);
+  tables.resize(workers);  // one a worker, each part after the other
+  detail::parallel_for(parts, unsigned(workers), 1, [&](std::size_t part, unsigned worker) {
+    PackedKeyMap<std::uint8_t>& cells = tables[worker];
+    cells.forget_keys();
+    cells.reserve(cap);
     BatchedInsert batch(cells);
     RecentKeys<std::uint8_t> recent;
     each_point(0, size, [&](std::size_t, const pcl::PointXYZ& q) {
@@ -424,8 +431,9 @@ auto points_of(const Cloud& cloud) {
 }  // namespace
 
 std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap, unsigned threads) {
-  return count_cells_of(cloud.size(), points_of(cloud), spacing, cap,
-                        detail::thread_count(threads));
+  std::vector<PackedKeyMap<std::uint8_t>> tables;
+  return count_cells_of(cloud.size(), points_of(cloud), spacing, cap, detail::thread_count(threads),
+                        tables);
 }
 
 CellThinning::CellThinning(double spacing) : inv_(1.0 / spacing), kept_(new Cloud) {
@@ -711,8 +719,9 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     std::size_t slots = 64;
     while (CellTable::keys_held_in(2 * slots) <= 2 * p.target_points) slots *= 2;
     const std::size_t cap = CellTable::keys_held_in(slots) - 1;
+    std::vector<CellTable> tables;  // the counts' tables, filled again by each count
     auto count_cut = [&](double s) {
-      const std::size_t n = count_cells_of(input.size(), each_cut_in, s, cap, threads);
+      const std::size_t n = count_cells_of(input.size(), each_cut_in, s, cap, threads, tables);
       r.spacing_counts.emplace_back(s, n);
       return double(n);
     };

@@ -58,6 +58,17 @@ TEST(PackedKeyMap, InsertOrAssignReplacesAndInsertIsASet) {
   EXPECT_FALSE(set.insert(5));
   EXPECT_FALSE(set.insert(0));
   EXPECT_EQ(set.size(), 2 + 4 * reserved);
+
+  // forget_keys empties the table but keeps its slots; it fills again as new.
+  const std::size_t grown = set.capacity();
+  set.forget_keys();
+  EXPECT_EQ(set.size(), 0u);
+  EXPECT_EQ(set.capacity(), grown);
+  EXPECT_EQ(set.find(5), nullptr);
+  EXPECT_EQ(set.find(100), nullptr);
+  EXPECT_TRUE(set.insert(100));
+  EXPECT_EQ(*set.try_emplace(7, 3).first, 3u);
+  EXPECT_EQ(set.size(), 2u);
 }
 
 // A lookup of a key already there never grows the table: pointers into it

@@ -5,6 +5,7 @@
 // two, not a modulo by a prime and a pointer chase as in std::unordered_map.
 #pragma once
 
+#include <algorithm>
 #include <cassert>
 #include <cstddef>
 #include <cstdint>
@@ -98,6 +99,12 @@ class PackedKeyMap {
       keys_[i] = old_keys[j];
       values_[i] = old_values[j];
     }
+  }
+  // Forgets every key but keeps the slots: a table filled again and again (a count per
+  // trial) is not allocated, and its pages faulted in, each time.
+  void forget_keys() {
+    std::fill(keys_.begin(), keys_.end(), kNoKey);
+    size_ = 0;
   }
   void clear() {
     keys_ = {};
