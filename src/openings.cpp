@@ -435,6 +435,10 @@ std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceili
   constexpr std::uint64_t kSampleSeed = 20240505;
 
   const Point3& s0 = scanner_positions.front();
+  // What each round leaves for the next: two buffers taking turns (a fresh cloud of the
+  // map's size a round faulted its pages in every time).
+  Cloud::Ptr rest(new Cloud);
+  rest->reserve(remaining->size());
   for (int round = 0; round < p.max_planes && remaining->size() >= p.min_plane_points; ++round) {
     // RANSAC on a random subset: the big planes are found as well and the cost
     // does not grow with the cloud.
@@ -449,8 +453,7 @@ std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceili
 
     // Inliers of the whole remaining cloud; the rest goes on to the next round.
     std::vector<int> in;
-    Cloud::Ptr rest(new Cloud);
-    rest->reserve(remaining->size());
+    rest->clear();
     for (int i = 0; i < int(remaining->size()); ++i) {
       if (std::abs(plane.distance((*remaining)[i])) <= p.ransac_distance)
         in.push_back(i);
@@ -560,7 +563,7 @@ std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceili
         }
       }
     }
-    remaining = rest;
+    std::swap(remaining, rest);
   }
   return drop_far_faces(std::move(result), scanner_positions.front(), p, rep);
 }
