@@ -345,12 +345,11 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
   const std::size_t split = workers == 1 ? 2 : 1;  // tables a worker
   double estimate = 0;  // cells in all, extrapolated from the tables' fill
   {
-    std::vector<PackedKeyMap<std::uint8_t>>& cells = tables;
-    cells.resize(workers * split);
+    tables.resize(workers * split);
     std::vector<double> share_read(workers, 1.0);  // of the worker's positions, when it stopped
     detail::parallel_for(workers, unsigned(workers), 1, [&](std::size_t w, unsigned) {
       const std::size_t begin = size * w / workers, end = size * (w + 1) / workers;
-      PackedKeyMap<std::uint8_t>* own = &cells[w * split];
+      PackedKeyMap<std::uint8_t>* own = &tables[w * split];
       std::vector<BatchedInsert> batches;
       for (std::size_t t = 0; t < split; ++t) {
         own[t].forget_keys();
@@ -377,21 +376,21 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
       if (!more) share_read[w] = double(last + 1 - begin) / double(end - begin);
     });
     bool over = false;
-    for (std::size_t t = 0; t < cells.size(); ++t) {
-      over = over || cells[t].size() > cap;
-      estimate += double(cells[t].size()) / std::max(share_read[t / split], 1e-9);
+    for (std::size_t t = 0; t < tables.size(); ++t) {
+      over = over || tables[t].size() > cap;
+      estimate += double(tables[t].size()) / std::max(share_read[t / split], 1e-9);
     }
     if (!over && split > 1)  // one worker's tables: their keys apart
-      return std::accumulate(cells.begin(), cells.end(), std::size_t(0),
+      return std::accumulate(tables.begin(), tables.end(), std::size_t(0),
                              [](std::size_t n, const auto& t) { return n + t.size(); });
     if (!over) {
       // The workers' union: each table's keys that no table before it holds (looked up,
       // not inserted: no table grows).
-      std::size_t n = cells[0].size();
+      std::size_t n = tables[0].size();
       for (std::size_t w = 1; w < workers; ++w)
-        cells[w].for_each_key([&](std::uint64_t k) {
+        tables[w].for_each_key([&](std::uint64_t k) {
           bool before = false;
-          for (std::size_t v = 0; v < w && !before; ++v) before = cells[v].find(k) != nullptr;
+          for (std::size_t v = 0; v < w && !before; ++v) before = tables[v].find(k) != nullptr;
           n += !before;
           return true;
         });

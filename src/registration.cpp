@@ -112,7 +112,7 @@ class BoundedKdTree : public detail::KdTreeN {
     // The nearest within the bound, or the nearest few, nearest first: the first on a
     // surface facing the same way.
     constexpr int kFacingCandidates = 8;
-    const bool facing = !(!target_side_ || n.squaredNorm() < 0.5f);  // (a NaN normal: facing)
+    const bool facing = target_side_ && !(n.squaredNorm() < 0.5f);  // (a NaN normal: facing)
     int near[kFacingCandidates];
     float d2[kFacingCandidates];
     const int found = nearest_within(point, facing ? kFacingCandidates : 1, bound_, near, d2);

@@ -43,8 +43,8 @@ struct RegistrationParams {
   // coarser until it fits); fitness and overlap are measured on the last stage's source
   // (docs/registration.md, "What it costs").
   std::size_t icp_source_points = 20000;
-  unsigned threads =
-      0;  // for the source's surface normals (0: one per core); the result is the same
+  // Workers for the source's surface normals (0: one per core); the result is the same.
+  unsigned threads = 0;
 };
 
 struct RegistrationResult {
