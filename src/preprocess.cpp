@@ -523,6 +523,33 @@ Cloud::Ptr decimate(const Cloud& cloud, double spacing) {
 
 namespace {
 
+// A set of positions below 2^32, as runs of consecutive ones, added in increasing order.
+class PositionRuns {
+ public:
+  void add(std::size_t i) {
+    if (ends_.empty() || ends_.back() != i) {
+      starts_.push_back(std::uint32_t(i));
+      ends_.push_back(std::uint32_t(i + 1));
+    } else {
+      ++ends_.back();
+    }
+  }
+  // f(i) for the positions held within [begin, end), in order, until f returns false.
+  template <class F>
+  void for_each_in(std::size_t begin, std::size_t end, const F& f) const {
+    // The first run ending after begin.
+    auto run = std::size_t(std::upper_bound(ends_.begin(), ends_.end(), begin) - ends_.begin());
+    for (; run < starts_.size() && starts_[run] < end; ++run)
+      for (std::size_t i = std::max<std::size_t>(begin, starts_[run]),
+                       stop = std::min<std::size_t>(end, ends_[run]);
+           i < stop; ++i)
+        if (!f(i)) return;
+  }
+
+ private:
+  std::vector<std::uint32_t> starts_, ends_;  // run k holds [starts_[k], ends_[k])
+};
+
 // The floor and the ceiling among the planes (indices into them).
 struct FloorAndCeiling {
   std::size_t floor = 0;
@@ -570,6 +597,12 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   const unsigned threads = detail::thread_count(p.threads);
   PreprocessResult r;
   r.input_points = input.size();
+  if (input.size() > std::numeric_limits<std::uint32_t>::max()) {
+    std::ostringstream m;
+    m << "too many points to preprocess at once: " << input.size() << " (at most "
+      << std::numeric_limits<std::uint32_t>::max() << "; split the scan)";
+    throw PreprocessError(m.str());
+  }
   if (input.size() < p.min_points) {
     std::ostringstream m;
     m << "too few points to preprocess: " << input.size() << " (need at least " << p.min_points
@@ -646,16 +679,18 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
 
   const double zf = p.sigma_factor * r.floor.sigma, zc = p.sigma_factor * r.ceiling.sigma;
   const double dz = T.translation().z();
-  std::vector<bool> in_band(input.size());  // on the floor or the ceiling: cut
+  // The points off the floor's and the ceiling's bands, as runs of consecutive positions:
+  // a scan's sweeps cross each band in one stretch, so a lab scan of 5.4 M points makes
+  // about 50 000 runs, and the passes below skip a band a run at a time.
+  PositionRuns kept_runs;
   for (std::size_t i = 0; i < input.size(); ++i) {
     const float v = float(double(levelled(i).z) + dz);
-    if (std::fabs(v - r.floor.center) <= zf) {
+    if (std::fabs(v - r.floor.center) <= zf)
       ++r.floor.removed;
-      in_band[i] = true;
-    } else if (r.ceiling_found && std::fabs(v - r.ceiling.center) <= zc) {
+    else if (r.ceiling_found && std::fabs(v - r.ceiling.center) <= zc)
       ++r.ceiling.removed;
-      in_band[i] = true;
-    }
+    else
+      kept_runs.add(i);
   }
   // The cut cloud (the points kept, levelled) is streamed, not stored: decimation reads it
   // a few times, levelling each point again, and keeps only what it decimates to (a scan
@@ -664,12 +699,11 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   // each_cut_in(begin, end, f): f(i, v) for the cut cloud's points among the input's
   // [begin, end), in order, until f returns false; each_cut(f): f(v) for all of them.
   auto each_cut_in = [&](std::size_t begin, std::size_t end, auto&& f) {
-    for (std::size_t i = begin; i < end; ++i) {
-      if (in_band[i]) continue;
+    kept_runs.for_each_in(begin, end, [&](std::size_t i) {
       pcl::PointXYZ v = levelled(i);
       v.z = float(double(v.z) + dz);
-      if (!f(i, v)) return;
-    }
+      return f(i, v);
+    });
   };
   auto each_cut = [&](auto&& f) {
     each_cut_in(0, input.size(), [&](std::size_t, const pcl::PointXYZ& v) { return f(v); });

@@ -182,6 +182,22 @@ TEST(Preprocess, KeepsTheSamePointsOnAnyThreads) {
   }
 }
 
+// The passes over the cut cloud read every point off the floor's and the ceiling's bands
+// once, wherever the threads' shares begin and end: with cells far finer than the points'
+// spacing, decimation keeps them all.
+TEST(Preprocess, DecimationReadsEveryPointOfTheCutCloudOnce) {
+  auto room = testing::synthetic_room(8, 6, 3, 0.01, 0.002);
+  PreprocessParams p;
+  p.min_spacing = 1e-4;
+  for (unsigned threads : {1u, 2u, 3u}) {
+    p.threads = threads;
+    const PreprocessResult r = preprocess(*room, p);
+    ASSERT_GT(r.after_cut, 4 * 65536u) << threads;  // shares of at least 65 536 points
+    EXPECT_EQ(r.cloud->size(), r.after_cut) << threads;
+    EXPECT_EQ(distinct_cells(*r.cloud, 1e-4), r.after_cut) << threads;
+  }
+}
+
 TEST(Preprocess, DecimatesToSpacingOrTargetCount) {
   const auto room = testing::synthetic_room(8, 6, 3, 0.01, 0.002);
   PreprocessParams p;

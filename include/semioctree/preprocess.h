@@ -87,7 +87,7 @@ class PreprocessError : public std::runtime_error {
 };
 
 // Throws PreprocessError (with the reason) when the cloud has fewer than
-// params.min_points points, no plane within max_tilt_deg of horizontal, or
+// params.min_points points or more than 2^32 − 1, no plane within max_tilt_deg of horizontal, or
 // neither a ceiling (a horizontal surface at least min_room_height above the
 // floor), a given height nor a point above the floor.
 PreprocessResult preprocess(const Cloud& input, const PreprocessParams& params = {});
