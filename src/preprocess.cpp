@@ -10,7 +10,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <optional>
 #include <sstream>
@@ -322,16 +324,130 @@ std::size_t part_of(std::uint64_t key, std::uint64_t parts) {
   return std::size_t((key * 0x9E3779B97F4A7C15ull >> 32) % parts);
 }
 
+// The bounds of a cloud's finite points.
+struct PointBounds {
+  float lo[3] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
+                 std::numeric_limits<float>::infinity()};
+  float hi[3] = {-std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(),
+                 -std::numeric_limits<float>::infinity()};
+  void add(const pcl::PointXYZ& q) {
+    if (!finite(q)) return;
+    const float v[3] = {q.x, q.y, q.z};
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v[a]), hi[a] = std::max(hi[a], v[a]);
+  }
+  bool empty() const { return !(lo[0] <= hi[0]); }
+};
+
+// A set of the cells of spacing 1 / inv within bounds, as bits: blocks of 8 × 8 × 8 cells
+// (64 bytes), each allocated when one of its cells is first set, found through an index
+// of all the bounds' blocks (4 bytes each). A scan's points lie on surfaces, so the blocks
+// they touch are few and full; setting a bit is one look-up in the index and one in a
+// block, where a hash table probes megabytes at a hashed place. It holds cell_key's cells
+// exactly while the bounds span fewer than 2^21 cells along each axis (where no two of
+// cell_key's keys alias).
+class CellBits {
+ public:
+  // A set for the cells of the points within `bounds` (not empty) whose index and blocks
+  // may take up to `budget` bytes: valid() is false if the index alone would take more,
+  // or the bounds span 2^21 cells or more along an axis.
+  CellBits(const PointBounds& bounds, double inv, std::size_t budget) : inv_(inv) {
+    double blocks = 1;
+    for (int a = 0; a < 3; ++a) {
+      lo_[a] = floor_to_int(double(bounds.lo[a]) * inv);
+      const std::int64_t cells = floor_to_int(double(bounds.hi[a]) * inv) - lo_[a] + 1;
+      if (!(cells > 0 && cells < (std::int64_t(1) << 21))) return;
+      blocks_[a] = std::uint64_t(cells + 7) / 8;
+      blocks *= double(blocks_[a]);
+    }
+    if (blocks * sizeof(std::uint32_t) > double(budget)) return;
+    // Zeroed pages from the system (calloc): only those the points' blocks reach are
+    // touched.
+    index_.reset(static_cast<std::uint32_t*>(std::calloc(std::size_t(blocks), 4)));
+    if (!index_) throw std::bad_alloc();
+    index_size_ = std::size_t(blocks);
+    budget_ = budget;
+  }
+  bool valid() const { return index_size_ > 0; }
+  // Sets the cell of q, a finite point within the bounds; false if it was set already.
+  bool insert(const pcl::PointXYZ& q) {
+    const float v[3] = {q.x, q.y, q.z};
+    std::uint64_t c[3];
+    for (int a = 0; a < 3; ++a) c[a] = std::uint64_t(floor_to_int(double(v[a]) * inv_) - lo_[a]);
+    const std::size_t at = (c[0] >> 3) + blocks_[0] * ((c[1] >> 3) + blocks_[1] * (c[2] >> 3));
+    std::uint32_t& block = index_[at];
+    if (block == 0) {
+      bits_.resize(bits_.size() + 8, 0);
+      placed_.push_back(at);
+      block = std::uint32_t(placed_.size());
+    }
+    std::uint64_t& word = bits_[std::size_t(block - 1) * 8 + (c[2] & 7)];
+    const std::uint64_t bit = std::uint64_t(1) << ((c[0] & 7) | (c[1] & 7) << 3);
+    if (word & bit) return false;
+    word |= bit;
+    ++size_;
+    return true;
+  }
+  // Whether the blocks set so far keep the set within its budget.
+  bool within_budget() const {
+    return index_size_ * sizeof(std::uint32_t) + bits_.capacity() * sizeof(std::uint64_t) +
+               placed_.capacity() * sizeof(std::size_t) <=
+           budget_;
+  }
+  std::size_t size() const { return size_; }
+  // The cells set in any of `sets` (of the same bounds and spacing): each set's cells that
+  // no set before it holds, over the blocks it set.
+  static std::size_t union_size(const std::vector<CellBits>& sets) {
+    std::size_t n = sets.empty() ? 0 : sets[0].size();
+    for (std::size_t s = 1; s < sets.size(); ++s)
+      for (std::size_t k = 0; k < sets[s].placed_.size(); ++k)
+        for (std::size_t w = 0; w < 8; ++w) {
+          std::uint64_t before = 0;
+          for (std::size_t t = 0; t < s; ++t)
+            if (const std::uint32_t block = sets[t].index_[sets[s].placed_[k]])
+              before |= sets[t].bits_[std::size_t(block - 1) * 8 + w];
+          n += std::size_t(__builtin_popcountll(sets[s].bits_[k * 8 + w] & ~before));
+        }
+    return n;
+  }
+
+ private:
+  struct Free {
+    void operator()(std::uint32_t* p) const { std::free(p); }
+  };
+  double inv_;
+  std::int64_t lo_[3] = {0, 0, 0};       // the bounds' first cell
+  std::uint64_t blocks_[3] = {0, 0, 0};  // blocks along each axis
+  std::size_t budget_ = 0;
+  // Per block of the bounds: 0, or 1 + its place among the blocks set.
+  std::unique_ptr<std::uint32_t[], Free> index_;
+  std::size_t index_size_ = 0;
+  std::vector<std::uint64_t> bits_;  // 8 words a block set: word z, bit x + 8·y within it
+  std::vector<std::size_t> placed_;  // per block set: its place in the index
+  std::size_t size_ = 0;
+};
+
+// The bytes a count's hash tables take: `tables` of them for up to cap + 1 keys each.
+std::size_t table_bytes(std::size_t cap, std::size_t tables) {
+  using CellTable = PackedKeyMap<std::uint8_t>;
+  std::size_t slots = 64;
+  while (CellTable::keys_held_in(slots) < cap + 1) slots *= 2;
+  return tables * slots * (sizeof(std::uint64_t) + sizeof(std::uint8_t));
+}
+
 // count_cells over the points `each_point` streams: each_point(begin, end, f) calls
 // f(i, q) for each point q, at position i, of the positions [begin, end) of `size`, in
 // order, and stops when f returns false. Contiguous shares of the positions are counted on
 // `threads` workers, each into a table of its own, and the keys of their union counted:
 // the count is exact whatever the threads.
 // `tables`: the tables of an earlier count to fill again (their keys forgotten), or none.
+// `bounds`: the points' bounds, if known: where a CellBits set a worker fits in the memory
+// the tables would take, the cells are counted in those (the same count), and the tables
+// are let go.
 template <class EachPoint>
 std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double spacing,
                            std::size_t cap, unsigned threads,
-                           std::vector<PackedKeyMap<std::uint8_t>>& tables) {
+                           std::vector<PackedKeyMap<std::uint8_t>>& tables,
+                           const PointBounds* bounds) {
   // One table of at most cap + 1 keys a worker first (their union counted by looking
   // keys up); past that, the parts are as many as keep each table near the cap, from the
   // share of the points read when a table filled (a scan's points sweep its surfaces in
@@ -343,6 +459,25 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
   const std::size_t workers =
       std::max<std::size_t>(1, std::min<std::size_t>(threads, size / kMinThreadShare));
   const std::size_t split = workers == 1 ? 2 : 1;  // tables a worker
+  if (bounds && !bounds->empty()) {
+    const std::size_t budget = table_bytes(cap, workers * split) / workers;
+    std::vector<CellBits> sets;
+    for (std::size_t w = 0; w < workers; ++w) sets.emplace_back(*bounds, inv, budget);
+    if (sets[0].valid()) {
+      std::vector<std::uint8_t> fits(workers, 1);
+      detail::parallel_for(workers, unsigned(workers), 1, [&](std::size_t w, unsigned) {
+        CellBits& set = sets[w];
+        each_point(size * w / workers, size * (w + 1) / workers,
+                   [&](std::size_t, const pcl::PointXYZ& q) {
+                     return !finite(q) || !set.insert(q) || (fits[w] = set.within_budget());
+                   });
+      });
+      if (std::all_of(fits.begin(), fits.end(), [](std::uint8_t f) { return f != 0; })) {
+        tables.clear();
+        return CellBits::union_size(sets);
+      }
+    }
+  }
   double estimate = 0;  // cells in all, extrapolated from the tables' fill
   {
     tables.resize(workers * split);
@@ -431,8 +566,10 @@ auto points_of(const Cloud& cloud) {
 
 std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap, unsigned threads) {
   std::vector<PackedKeyMap<std::uint8_t>> tables;
+  PointBounds bounds;
+  for (const pcl::PointXYZ& q : cloud) bounds.add(q);
   return count_cells_of(cloud.size(), points_of(cloud), spacing, cap, detail::thread_count(threads),
-                        tables);
+                        tables, &bounds);
 }
 
 CellThinning::CellThinning(double spacing) : inv_(1.0 / spacing), kept_(new Cloud) {
@@ -683,14 +820,18 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
   // a scan's sweeps cross each band in one stretch, so a lab scan of 5.4 M points makes
   // about 50 000 runs, and the passes below skip a band a run at a time.
   PositionRuns kept_runs;
+  PointBounds cut_bounds;  // of the points kept, levelled
   for (std::size_t i = 0; i < input.size(); ++i) {
-    const float v = float(double(levelled(i).z) + dz);
-    if (std::fabs(v - r.floor.center) <= zf)
+    pcl::PointXYZ q = levelled(i);
+    q.z = float(double(q.z) + dz);
+    if (std::fabs(q.z - r.floor.center) <= zf) {
       ++r.floor.removed;
-    else if (r.ceiling_found && std::fabs(v - r.ceiling.center) <= zc)
+    } else if (r.ceiling_found && std::fabs(q.z - r.ceiling.center) <= zc) {
       ++r.ceiling.removed;
-    else
+    } else {
       kept_runs.add(i);
+      cut_bounds.add(q);
+    }
   }
   // The cut cloud (the points kept, levelled) is streamed, not stored: decimation reads it
   // a few times, levelling each point again, and keeps only what it decimates to (a scan
@@ -754,7 +895,8 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     const std::size_t cap = CellTable::keys_held_in(slots) - 1;
     std::vector<CellTable> tables;  // the counts' tables, filled again by each count
     auto count_cut = [&](double s) {
-      const std::size_t n = count_cells_of(input.size(), each_cut_in, s, cap, threads, tables);
+      const std::size_t n =
+          count_cells_of(input.size(), each_cut_in, s, cap, threads, tables, &cut_bounds);
       r.spacing_counts.emplace_back(s, n);
       return double(n);
     };
