@@ -115,11 +115,13 @@ class BoundedKdTree : public detail::KdTreeN {
     const bool facing = target_side_ && !(n.squaredNorm() < 0.5f);  // (a NaN normal: facing)
     int near[kFacingCandidates];
     float d2[kFacingCandidates];
-    const int found = nearest_within(point, facing ? kFacingCandidates : 1, bound_, near, d2);
+    // The nearest alone first: most often it faces the same way, and a search for one
+    // prunes more than a search for eight (whose first is the same point).
+    int found = nearest_within(point, 1, bound_, near, d2);
+    if (facing && found == 1 && !accepts(n, near[0]))
+      found = nearest_within(point, kFacingCandidates, bound_, near, d2);
     for (int i = 0; i < found; ++i) {
-      const State state = prepare(near[i]);
-      if (!facing || state != kOriented ||
-          n.dot((*input_)[std::size_t(near[i])].getNormalVector3fMap()) > 0.0f) {
+      if (accepts(n, near[i]) || !facing) {  // (its normal fitted either way)
         indices.assign(1, near[i]);
         sqr_distances.assign(1, d2[i]);
         return 1;
@@ -133,6 +135,12 @@ class BoundedKdTree : public detail::KdTreeN {
 
  private:
   enum State : std::uint8_t { kUnfitted, kNoNormal, kUnoriented, kOriented };
+  // Whether target point i may pair with a source point of normal n: its normal, fitted
+  // now if not yet, is unknown or unoriented, or faces the same way.
+  bool accepts(const Eigen::Vector3f& n, int i) const {
+    return prepare(i) != kOriented ||
+           n.dot((*input_)[std::size_t(i)].getNormalVector3fMap()) > 0.0f;
+  }
   // Fits point i's normal (and orients it) the first time it is asked for.
   State prepare(int i) const {
     State& state = state_[std::size_t(i)];
