@@ -189,14 +189,17 @@ std::vector<HorizontalPlane> find_horizontal_planes(const Cloud& input, const Cl
 // Normal of the least-squares plane through the points within `distance` of
 // `plane` (oriented to +z).
 Eigen::Vector3d refine_normal(const Cloud& cloud, const HorizontalPlane& plane, double distance) {
-  Cloud near;
-  for (const auto& q : cloud)
+  // The inliers by index (a floor holds millions of a scan's points: not copied).
+  pcl::Indices near;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const pcl::PointXYZ& q = cloud[i];
     if (std::fabs(plane.normal.dot(Eigen::Vector3d(q.x, q.y, q.z)) + plane.d) <= distance)
-      near.push_back(q);
+      near.push_back(pcl::index_t(i));
+  }
   if (near.size() < 10) return plane.normal;
   Eigen::Matrix3f cov = Eigen::Matrix3f::Zero();
   Eigen::Vector4f centroid;
-  pcl::computeMeanAndCovarianceMatrix(near, cov, centroid);
+  pcl::computeMeanAndCovarianceMatrix(cloud, near, cov, centroid);
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> es(cov);
   Eigen::Vector3d n = es.eigenvectors().col(0).cast<double>().normalized();
   return n.z() < 0 ? -n : n;
