@@ -261,10 +261,13 @@ HeightPeak fit_peak(const PeakStart& start, const EachHeight& each_height,
       each_height(add);
     if (n < 10) break;
     const double mean = sum / double(n);
+    const double center_before = peak.center, window_before = window;
     peak.center += mean;
     peak.sigma = std::sqrt(std::max(0.0, sum2 / double(n) - mean * mean));
     // A ±w window truncates the Gaussian; 3σ keeps 99.7 % of it.
     window = std::max(3.0 * peak.sigma, 2 * p.histogram_bin);
+    // The same centre and window: every pass after this one would be this one again.
+    if (peak.center == center_before && window == window_before) break;
   }
   peak.sigma = std::max(peak.sigma, p.min_sigma);
   return peak;
