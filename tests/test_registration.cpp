@@ -202,12 +202,16 @@ TEST(Registration, NoiseFailsNamingFitnessAndOverlap) {
   }
 }
 
-// A 4 × 3.88 m room B (x 0..4, y 0.12..4) north of a 0.12 m partition (y 0..0.12) that
-// runs on 4 m to either side, as a corridor's wall does. The map saw the partition's
-// south face (y = 0) from the south, and room B's other walls through a door; the new
-// scan sees the partition's north face (y = 0.12) all along. `north_face`: the scan's
-// walls, else the map's.
-Cloud::Ptr partitioned(bool north_face, double spacing, unsigned seed) {
+// Room B (x 0..4, y 0.12..4) north of a 0.12 m partition (y 0..0.12) that runs on 4 m to
+// either side, as a corridor's wall does: which of the walls a cloud holds.
+struct PartitionWalls {
+  bool south_face = false;        // the partition's south face (y = 0), seen from the south
+  bool north_face = false;        // its north face (y = 0.12), seen from room B
+  bool far_wall = true;           // room B's north wall (y = 4)
+  double side_walls_from = 0.12;  // room B's side walls (x = 0 and 4) run from this y to 4
+};
+
+Cloud::Ptr partitioned(const PartitionWalls& walls, double spacing, unsigned seed) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> noise(0.0, 0.002);
   Cloud::Ptr c(new Cloud);
@@ -215,11 +219,14 @@ Cloud::Ptr partitioned(bool north_face, double spacing, unsigned seed) {
     c->push_back(
         pcl::PointXYZ{float(x + noise(rng)), float(y + noise(rng)), float(z + noise(rng))});
   };
-  const double partition = north_face ? 0.12 : 0.0;
   for (double z = 0.2; z <= 2.4; z += spacing) {
-    for (double x = -4.0; x <= 8.0; x += spacing) add(x, partition, z);
-    for (double x = 0.0; x <= 4.0; x += spacing) add(x, 4.0, z);  // the far wall
-    for (double y = 0.12; y <= 4.0; y += spacing) {
+    for (double x = -4.0; x <= 8.0; x += spacing) {
+      if (walls.south_face) add(x, 0.0, z);
+      if (walls.north_face) add(x, 0.12, z);
+    }
+    if (walls.far_wall)
+      for (double x = 0.0; x <= 4.0; x += spacing) add(x, 4.0, z);
+    for (double y = walls.side_walls_from; y <= 4.0; y += spacing) {
       add(0.0, y, z);
       add(4.0, y, z);
     }
@@ -227,11 +234,28 @@ Cloud::Ptr partitioned(bool north_face, double spacing, unsigned seed) {
   return c;
 }
 
-// The partition's faces: the south one seen from the south, every other wall from room B.
+// The clouds of the partition's two faces: the map saw its south face, and room B's other
+// walls through a door; the scan sees its north face all along, and room B's walls.
+PartitionWalls map_with_south_face() {
+  PartitionWalls walls;
+  walls.south_face = true;
+  return walls;
+}
+PartitionWalls scan_from_room_b() {
+  PartitionWalls walls;
+  walls.north_face = true;
+  return walls;
+}
+
+// The side each wall was seen from: the partition's south face from the south, every
+// other wall from room B.
 int side_seen(const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
   Eigen::Vector3d towards;  // from the surface to where it was seen from
+  const bool between_side_walls = p.x() > 0.06 && p.x() < 3.94;
   if (std::abs(p.y()) < 0.06)
     towards = {0, -1, 0};
+  else if (std::abs(p.y() - 0.12) < 0.06 && between_side_walls)
+    towards = {0, 1, 0};
   else if (std::abs(p.y() - 4.0) < 0.06)
     towards = {0, -1, 0};
   else
@@ -243,8 +267,8 @@ int side_seen(const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
 // Without the facing, the scan's side of the partition is laid onto the other side: a
 // shift by the wall's thickness that fits well. With it, the faces are told apart.
 TEST(Registration, TheTwoFacesOfAWallAreNotConfused) {
-  const Cloud::Ptr target = partitioned(false, 0.03, 1);
-  const Cloud::Ptr truth = partitioned(true, 0.037, 2);
+  const Cloud::Ptr target = partitioned(map_with_south_face(), 0.03, 1);
+  const Cloud::Ptr truth = partitioned(scan_from_room_b(), 0.037, 2);
   const Eigen::Isometry3d error = planar_pose(0.0, 0.06, 0.0);  // half the wall's thickness
   const Cloud::Ptr source = transformed(*truth, error);
   SurfaceFacing facing;
@@ -267,56 +291,25 @@ TEST(Registration, TheTwoFacesOfAWallAreNotConfused) {
   EXPECT_GT(faced.overlap, 0.4);
 }
 
-// A 0.12 m partition (y 0..0.12) between two rooms, and room B's side walls (x = 0 and
-// x = 4, y 0.6..4: doorways at both of its corners), which fix x and the yaw but not y.
-// `both_faces`: the map's, which saw the partition's south face from the south and its north face
-// from room B; else the scan's, from room B: the north face only.
-Cloud::Ptr thin_partition(bool both_faces, double spacing, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0.0, 0.002);
-  Cloud::Ptr c(new Cloud);
-  auto add = [&](double x, double y, double z) {
-    c->push_back(
-        pcl::PointXYZ{float(x + noise(rng)), float(y + noise(rng)), float(z + noise(rng))});
-  };
-  for (double z = 0.2; z <= 2.4; z += spacing) {
-    for (double x = 0.0; x <= 4.0; x += spacing) {
-      add(x, 0.12, z);
-      if (both_faces) add(x, 0.0, z);
-    }
-    for (double y = 0.6; y <= 4.0; y += spacing) {
-      add(0.0, y, z);
-      add(4.0, y, z);
-    }
-  }
-  return c;
-}
-
-int thin_partition_side(const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
-  Eigen::Vector3d towards;  // from the surface to where it was seen from
-  if (std::abs(p.y()) < 0.06)
-    towards = {0, -1, 0};  // the south face, from the south
-  else if (std::abs(p.y() - 0.12) < 0.06)
-    towards = {0, 1, 0};  // the north face, from room B
-  else
-    towards = {p.x() < 2.0 ? 1.0 : -1.0, 0, 0};
-  const double d = n.dot(towards);
-  return d > 0.5 ? 1 : (d < -0.5 ? -1 : 0);
-}
-
 // A scan placed 7 cm south of the truth lays the partition's north face 5 cm from the
 // map's south face, which faces the other way, and 7 cm from its own: the nearest target
 // point of a source point there faces the wrong way, the next ones include its own face.
 // Only the partition fixes y: a source point must pair with the nearest target point
 // facing its way among the few nearest, not just with the nearest if it does.
 TEST(Registration, PairsWithTheNearestFacingItsWayNotJustTheNearest) {
-  const Cloud::Ptr target = thin_partition(true, 0.03, 3);
-  const Cloud::Ptr truth = thin_partition(false, 0.037, 4);
+  // Room B without its far wall, its side walls from y = 0.6 (doorways at both of its
+  // corners): they fix x and the yaw, not y. The map saw both faces of the partition.
+  PartitionWalls map_walls = map_with_south_face(), scan_walls = scan_from_room_b();
+  map_walls.north_face = true;
+  map_walls.far_wall = scan_walls.far_wall = false;
+  map_walls.side_walls_from = scan_walls.side_walls_from = 0.6;
+  const Cloud::Ptr target = partitioned(map_walls, 0.03, 3);
+  const Cloud::Ptr truth = partitioned(scan_walls, 0.037, 4);
   const Eigen::Isometry3d error = planar_pose(0.0, -0.07, 0.0);
   const Cloud::Ptr source = transformed(*truth, error);
   SurfaceFacing facing;
   facing.source_viewpoint = error * Eigen::Vector3d(2.0, 2.0, 1.5);
-  facing.target_side = thin_partition_side;
+  facing.target_side = side_seen;
   const RegistrationResult r = register_scan(*source, *target, {}, &facing);
   const double residual = (r.correction * error).translation().norm();
   std::printf(
@@ -334,8 +327,8 @@ TEST(Registration, PairsWithTheNearestFacingItsWayNotJustTheNearest) {
 // same placement, to the bit, on 1, 2 or 5 threads (with the facing, whose source normals
 // are estimated too).
 TEST(Registration, SamePlacementOnAnyNumberOfThreads) {
-  const Cloud::Ptr target = partitioned(false, 0.03, 1);
-  const Cloud::Ptr truth = partitioned(true, 0.037, 2);
+  const Cloud::Ptr target = partitioned(map_with_south_face(), 0.03, 1);
+  const Cloud::Ptr truth = partitioned(scan_from_room_b(), 0.037, 2);
   const Eigen::Isometry3d error = planar_pose(0.05, 0.06, 2.0);
   const Cloud::Ptr source = transformed(*truth, error);
   SurfaceFacing facing;
