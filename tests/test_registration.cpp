@@ -202,13 +202,14 @@ TEST(Registration, NoiseFailsNamingFitnessAndOverlap) {
   }
 }
 
-// Room B (x 0..4, y 0.12..4) north of a 0.12 m partition (y 0..0.12) that runs on 4 m to
-// either side, as a corridor's wall does: which of the walls a cloud holds.
+// Room B (x 0..4, y 0.12..4) north of a 0.12 m partition (y 0..0.12), which by default
+// runs on 4 m to either side, as a corridor's wall does: which of the walls a cloud holds.
 struct PartitionWalls {
-  bool south_face = false;        // the partition's south face (y = 0), seen from the south
-  bool north_face = false;        // its north face (y = 0.12), seen from room B
-  bool far_wall = true;           // room B's north wall (y = 4)
-  double side_walls_from = 0.12;  // room B's side walls (x = 0 and 4) run from this y to 4
+  bool south_face = false;              // the partition's south face (y = 0), seen from the south
+  bool north_face = false;              // its north face (y = 0.12), seen from room B
+  double partition_x[2] = {-4.0, 8.0};  // the partition's extent along x
+  bool far_wall = true;                 // room B's north wall (y = 4)
+  double side_walls_from = 0.12;        // room B's side walls (x = 0 and 4) run from this y to 4
 };
 
 Cloud::Ptr partitioned(const PartitionWalls& walls, double spacing, unsigned seed) {
@@ -220,7 +221,7 @@ Cloud::Ptr partitioned(const PartitionWalls& walls, double spacing, unsigned see
         pcl::PointXYZ{float(x + noise(rng)), float(y + noise(rng)), float(z + noise(rng))});
   };
   for (double z = 0.2; z <= 2.4; z += spacing) {
-    for (double x = -4.0; x <= 8.0; x += spacing) {
+    for (double x = walls.partition_x[0]; x <= walls.partition_x[1]; x += spacing) {
       if (walls.south_face) add(x, 0.0, z);
       if (walls.north_face) add(x, 0.12, z);
     }
@@ -251,10 +252,9 @@ PartitionWalls scan_from_room_b() {
 // other wall from room B.
 int side_seen(const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
   Eigen::Vector3d towards;  // from the surface to where it was seen from
-  const bool between_side_walls = p.x() > 0.06 && p.x() < 3.94;
   if (std::abs(p.y()) < 0.06)
     towards = {0, -1, 0};
-  else if (std::abs(p.y() - 0.12) < 0.06 && between_side_walls)
+  else if (std::abs(p.y() - 0.12) < 0.06 && std::abs(n.y()) > std::abs(n.x()))  // not a side wall
     towards = {0, 1, 0};
   else if (std::abs(p.y() - 4.0) < 0.06)
     towards = {0, -1, 0};
@@ -298,10 +298,15 @@ TEST(Registration, TheTwoFacesOfAWallAreNotConfused) {
 // facing its way among the few nearest, not just with the nearest if it does.
 TEST(Registration, PairsWithTheNearestFacingItsWayNotJustTheNearest) {
   // Room B without its far wall, its side walls from y = 0.6 (doorways at both of its
-  // corners): they fix x and the yaw, not y. The map saw both faces of the partition.
+  // corners): they fix x and the yaw, not y. The partition, only as long as the room is
+  // wide, is seen from both sides in the map.
   PartitionWalls map_walls = map_with_south_face(), scan_walls = scan_from_room_b();
   map_walls.north_face = true;
   map_walls.far_wall = scan_walls.far_wall = false;
+  for (PartitionWalls* walls : {&map_walls, &scan_walls}) {
+    walls->partition_x[0] = 0.0;
+    walls->partition_x[1] = 4.0;
+  }
   map_walls.side_walls_from = scan_walls.side_walls_from = 0.6;
   const Cloud::Ptr target = partitioned(map_walls, 0.03, 3);
   const Cloud::Ptr truth = partitioned(scan_walls, 0.037, 4);
