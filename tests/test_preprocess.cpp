@@ -183,10 +183,10 @@ TEST(Preprocess, KeepsTheSamePointsOnAnyThreads) {
   }
 }
 
-// The passes over the cut cloud read every point off the floor's and the ceiling's bands
-// once, wherever the threads' shares begin and end: with cells far finer than the points'
+// The passes over the cut cloud read every point off the floor's and the ceiling's bands,
+// wherever the threads' shares begin and end: with cells far finer than the points'
 // spacing, decimation keeps them all.
-TEST(Preprocess, DecimationReadsEveryPointOfTheCutCloudOnce) {
+TEST(Preprocess, DecimationReadsEveryPointOfTheCutCloud) {
   auto room = testing::synthetic_room(8, 6, 3, 0.01, 0.002);
   PreprocessParams p;
   p.min_spacing = 1e-4;

@@ -137,7 +137,9 @@ class CellThinning {
 // counted part by part, one pass over the points a part. Non-finite points are skipped.
 // Contiguous shares of the cloud are counted on `threads` workers (0: one per core), a
 // table of up to `cap` keys each (one worker alone: two, its keys split between them by
-// hash), and the keys of their union counted by looking them up (no table grows).
+// hash), and the keys of their union counted by looking them up (no table grows). Where a
+// bitmap of the cells over the cloud's bounds fits in the memory those tables would take,
+// each worker counts in one instead (the same count; docs/data-flow.md, "Decimation").
 std::size_t count_cells(const Cloud& cloud, double spacing, std::size_t cap, unsigned threads = 1);
 
 }  // namespace semioctree
