@@ -38,10 +38,16 @@ std::int64_t floor_to_int(double t) {
   return i - std::int64_t(double(i) > t);
 }
 
+// Along one axis, the index of the world-aligned cell of side 1 / inv holding coordinate v
+// (finite): every cell of decimation, counting and the RANSAC's spread is made of these.
+std::int64_t cell_index(float v, double inv) {
+  return floor_to_int(double(v) * inv);
+}
+
 // The world-aligned cell of side 1 / inv holding q (finite), packed (decimate, count_cells and
 // the RANSAC's spread share it, so that a count is the count of what decimate keeps).
 std::uint64_t cell_key(const pcl::PointXYZ& q, double inv) {
-  auto part = [inv](float v) { return std::uint64_t(floor_to_int(double(v) * inv)); };
+  auto part = [inv](float v) { return std::uint64_t(cell_index(v, inv)); };
   return pack_cell_parts(part(q.x), part(q.y), part(q.z));
 }
 
@@ -359,8 +365,8 @@ class CellBits {
   CellBits(const PointBounds& bounds, double inv, std::size_t budget) : inv_(inv) {
     double blocks = 1;
     for (int a = 0; a < 3; ++a) {
-      lo_[a] = floor_to_int(double(bounds.lo[a]) * inv);
-      const std::int64_t cells = floor_to_int(double(bounds.hi[a]) * inv) - lo_[a] + 1;
+      lo_[a] = cell_index(bounds.lo[a], inv);
+      const std::int64_t cells = cell_index(bounds.hi[a], inv) - lo_[a] + 1;
       if (!(cells > 0 && cells < (std::int64_t(1) << 21))) return;
       blocks_[a] = std::uint64_t(cells + 7) / 8;
       blocks *= double(blocks_[a]);
@@ -378,7 +384,7 @@ class CellBits {
   bool insert(const pcl::PointXYZ& q) {
     const float v[3] = {q.x, q.y, q.z};
     std::uint64_t c[3];
-    for (int a = 0; a < 3; ++a) c[a] = std::uint64_t(floor_to_int(double(v[a]) * inv_) - lo_[a]);
+    for (int a = 0; a < 3; ++a) c[a] = std::uint64_t(cell_index(v[a], inv_) - lo_[a]);
     const std::size_t at = (c[0] >> 3) + blocks_[0] * ((c[1] >> 3) + blocks_[1] * (c[2] >> 3));
     std::uint32_t& block = index_[at];
     if (block == 0) {
@@ -434,10 +440,7 @@ class CellBits {
 
 // The bytes a count's hash tables take: `tables` of them for up to cap + 1 keys each.
 std::size_t table_bytes(std::size_t cap, std::size_t tables) {
-  using CellTable = PackedKeyMap<std::uint8_t>;
-  std::size_t slots = 64;
-  while (CellTable::keys_held_in(slots) < cap + 1) slots *= 2;
-  return tables * slots * (sizeof(std::uint64_t) + sizeof(std::uint8_t));
+  return tables * PackedKeyMap<std::uint8_t>::bytes_for(cap + 1);
 }
 
 // count_cells over the points `each_point` streams: each_point(begin, end, f) calls
@@ -475,7 +478,9 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
         CellBits& set = sets[w];
         each_point(size * w / workers, size * (w + 1) / workers,
                    [&](std::size_t, const pcl::PointXYZ& q) {
-                     return !finite(q) || !set.insert(q) || (fits[w] = set.within_budget());
+                     if (!finite(q) || !set.insert(q)) return true;
+                     fits[w] = set.within_budget();  // (only a new cell may grow it)
+                     return fits[w] != 0;
                    });
       });
       if (std::all_of(fits.begin(), fits.end(), [](std::uint8_t f) { return f != 0; })) {

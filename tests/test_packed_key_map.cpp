@@ -32,6 +32,21 @@ TEST(PackedKeyMap, AgreesWithUnorderedMapThroughGrowth) {
   EXPECT_LE(100 * map.size(), 75 * map.capacity());
 }
 
+// slots_for and bytes_for tell, without a table, what reserve gives one.
+TEST(PackedKeyMap, SlotsForIsWhatReserveGives) {
+  for (std::size_t n : {1u, 48u, 49u, 1000u, 786432u, 786433u}) {
+    PackedKeyMap<std::uint8_t> table;
+    table.reserve(n);
+    EXPECT_EQ(table.capacity(), PackedKeyMap<std::uint8_t>::slots_for(n)) << n;
+    EXPECT_EQ(table.memory_bytes(), PackedKeyMap<std::uint8_t>::bytes_for(n)) << n;
+  }
+  // At most 75 % full: 48 keys fit 64 slots, 49 need 128; 786 432 fit 2^20, one more 2^21.
+  EXPECT_EQ(PackedKeyMap<std::uint8_t>::slots_for(48), 64u);
+  EXPECT_EQ(PackedKeyMap<std::uint8_t>::slots_for(49), 128u);
+  EXPECT_EQ(PackedKeyMap<std::uint8_t>::slots_for(786432), std::size_t(1) << 20);
+  EXPECT_EQ(PackedKeyMap<std::uint8_t>::bytes_for(786433), (std::size_t(1) << 21) * 9);
+}
+
 TEST(PackedKeyMap, InsertOrAssignReplacesAndInsertIsASet) {
   int a = 0, b = 0;
   PackedKeyMap<int*, 50> nodes;

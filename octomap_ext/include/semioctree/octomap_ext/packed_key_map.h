@@ -81,11 +81,19 @@ class PackedKeyMap {
   void prefetch(std::uint64_t key) const {
     if (!keys_.empty()) __builtin_prefetch(&keys_[slot_of(key)]);
   }
+  // The slots reserve(n) gives a table (a power of two, at least 64), and their bytes.
+  static constexpr std::size_t slots_for(std::size_t n) {
+    std::size_t slots = 64;
+    while (kMaxLoadPercent * slots < 100 * n) slots *= 2;
+    return slots;
+  }
+  static constexpr std::size_t bytes_for(std::size_t n) {
+    return slots_for(n) * (sizeof(std::uint64_t) + sizeof(Value));
+  }
   // Room for n keys without growing.
   void reserve(std::size_t n) {
     if (n == 0) return;
-    std::size_t capacity = 64;
-    while (kMaxLoadPercent * capacity < 100 * n) capacity *= 2;
+    const std::size_t capacity = slots_for(n);
     if (capacity <= keys_.size()) return;
     std::vector<std::uint64_t> old_keys(capacity, kNoKey);
     std::vector<Value> old_values(capacity);
