@@ -380,7 +380,9 @@ class CellBits {
     budget_ = budget;
   }
   bool valid() const { return index_size_ > 0; }
-  // Sets the cell of q, a finite point within the bounds; false if it was set already.
+  // Sets the cell of q, a finite point within the bounds; false once the blocks set
+  // outgrow the budget (only a new block may). No branch hangs on whether the cell was
+  // set before (a scan's points revisit cells unpredictably): size() counts the bits.
   bool insert(const pcl::PointXYZ& q) {
     const float v[3] = {q.x, q.y, q.z};
     std::uint64_t c[3];
@@ -391,21 +393,18 @@ class CellBits {
       bits_.resize(bits_.size() + 8, 0);
       placed_.push_back(at);
       block = std::uint32_t(placed_.size());
+      if (!within_budget()) return false;
     }
-    std::uint64_t& word = bits_[std::size_t(block - 1) * 8 + (c[2] & 7)];
-    const std::uint64_t bit = std::uint64_t(1) << ((c[0] & 7) | (c[1] & 7) << 3);
-    if (word & bit) return false;
-    word |= bit;
-    ++size_;
+    bits_[std::size_t(block - 1) * 8 + (c[2] & 7)] |= std::uint64_t(1)
+                                                      << ((c[0] & 7) | (c[1] & 7) << 3);
     return true;
   }
-  // Whether the blocks set so far keep the set within its budget.
-  bool within_budget() const {
-    return index_size_ * sizeof(std::uint32_t) + bits_.capacity() * sizeof(std::uint64_t) +
-               placed_.capacity() * sizeof(std::size_t) <=
-           budget_;
+  // The cells set.
+  std::size_t size() const {
+    std::size_t n = 0;
+    for (const std::uint64_t word : bits_) n += std::size_t(__builtin_popcountll(word));
+    return n;
   }
-  std::size_t size() const { return size_; }
   // The cells set in any of `sets` (of the same bounds and spacing): each set's cells that
   // no set before it holds, over the blocks it set.
   static std::size_t union_size(const std::vector<CellBits>& sets) {
@@ -435,7 +434,13 @@ class CellBits {
   std::size_t index_size_ = 0;
   std::vector<std::uint64_t> bits_;  // 8 words a block set: word z, bit x + 8·y within it
   std::vector<std::size_t> placed_;  // per block set: its place in the index
-  std::size_t size_ = 0;
+
+  // Whether the blocks set so far keep the set within its budget.
+  bool within_budget() const {
+    return index_size_ * sizeof(std::uint32_t) + bits_.capacity() * sizeof(std::uint64_t) +
+               placed_.capacity() * sizeof(std::size_t) <=
+           budget_;
+  }
 };
 
 // The bytes a count's hash tables take: `tables` of them for up to cap + 1 keys each.
@@ -478,9 +483,9 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
         CellBits& set = sets[w];
         each_point(size * w / workers, size * (w + 1) / workers,
                    [&](std::size_t, const pcl::PointXYZ& q) {
-                     if (!finite(q) || !set.insert(q)) return true;
-                     fits[w] = set.within_budget();  // (only a new cell may grow it)
-                     return fits[w] != 0;
+                     if (!finite(q) || set.insert(q)) return true;
+                     fits[w] = 0;
+                     return false;
                    });
       });
       if (std::all_of(fits.begin(), fits.end(), [](std::uint8_t f) { return f != 0; })) {
