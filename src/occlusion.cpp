@@ -8,6 +8,7 @@
 #include <unordered_set>
 #include <utility>
 
+#include "direction_angles.h"
 #include "parallel_for.h"
 #include "polynomial_atan2.h"
 #include "scanner_limits.h"
@@ -66,6 +67,23 @@ struct DirectionBins {
       if (!(std::isfinite(a.length) && a.length > 0)) return false;
       a.up = detail::polynomial_atan2(z, a.horizontal);
       a.around = detail::polynomial_atan2(y, x);
+      return true;
+    }
+  };
+  // Angles::of for up to kSize vectors at once, lanes at a time (direction_angles): the
+  // same values, bit for bit.
+  struct AngleBatch {
+    static constexpr std::size_t kSize = 256;
+    double x[kSize], y[kSize], z[kSize];  // the vectors, set by the caller
+    double horizontal[kSize], length[kSize], up[kSize], around[kSize];
+    void compute(std::size_t n) {
+      detail::direction_angles(n, x, y, z, horizontal, length, up, around);
+    }
+    // Vector j's angles; false as Angles::of.
+    bool get(std::size_t j, Angles& a) const {
+      if (!(std::isfinite(length[j]) && length[j] > 0)) return false;
+      a.dx = x[j], a.dy = y[j], a.dz = z[j];
+      a.horizontal = horizontal[j], a.length = length[j], a.up = up[j], a.around = around[j];
       return true;
     }
   };
@@ -402,12 +420,20 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
   depth_cm_.clear();
   const unsigned workers = detail::thread_count(threads);
   const std::size_t chunk = 1 << 16, chunks = (scan.size() + chunk - 1) / chunk;
-  // f(angles) for each return of chunk c, in the map frame.
+  // f(angles) for each return of chunk c, in the map frame: Angles::of's values, a batch
+  // of returns at a time (direction_angles).
   auto each_return = [&](std::size_t c, auto&& f) {
-    DirectionBins::Angles a;
-    for (std::size_t i = c * chunk, end = std::min(scan.size(), i + chunk); i < end; ++i) {
-      const Eigen::Vector3d v = scanner_to_map * Eigen::Vector3d(scan[i].x, scan[i].y, scan[i].z);
-      if (DirectionBins::Angles::of(v.x(), v.y(), v.z(), a)) f(a);
+    DirectionBins::AngleBatch batch;
+    for (std::size_t i = c * chunk, end = std::min(scan.size(), i + chunk); i < end;) {
+      const std::size_t n = std::min(end - i, DirectionBins::AngleBatch::kSize);
+      for (std::size_t j = 0; j < n; ++j, ++i) {
+        const Eigen::Vector3d v = scanner_to_map * Eigen::Vector3d(scan[i].x, scan[i].y, scan[i].z);
+        batch.x[j] = v.x(), batch.y[j] = v.y(), batch.z[j] = v.z();
+      }
+      batch.compute(n);
+      DirectionBins::Angles a;
+      for (std::size_t j = 0; j < n; ++j)
+        if (batch.get(j, a)) f(a);
     }
   };
   // The depths, per bin of k a degree: the nearest and farthest return and their count

@@ -5,6 +5,7 @@
 #include <octomap/OcTree.h>
 
 #include <cmath>
+#include <cstring>
 #include <iostream>
 #include <limits>
 #include <memory>
@@ -17,6 +18,7 @@
 #include "semioctree/occlusion.h"
 #include "semioctree/openings.h"
 #include "semioctree/preprocess.h"
+#include "src/direction_angles.h"
 #include "src/polynomial_atan2.h"
 #include "support/synthetic_clouds.h"
 
@@ -519,6 +521,46 @@ TEST(Occlusion, PolynomialAtan2StaysWithinItsBound) {
       EXPECT_EQ(p, e) << y << ", " << x;
       EXPECT_EQ(std::signbit(p), std::signbit(e)) << y << ", " << x;
     }
+}
+
+// The angles of many vectors at once (direction_angles, lanes at a time) are the values
+// computed one vector at a time, bit for bit: random vectors over nine decades, the axes
+// and diagonals with signed zeros, ratios at the series' switch, and the pairs that
+// polynomial_atan2 scales or hands to std::atan2 (huge, subnormal, zero, infinite, NaN).
+TEST(Occlusion, DirectionAnglesAreTheOneAtATimeValuesBitForBit) {
+  std::vector<Eigen::Vector3d> v;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), exponent(-6.0, 3.0);
+  for (int i = 0; i < 20000; ++i)
+    v.emplace_back(unit(rng) * std::pow(10.0, exponent(rng)),
+                   unit(rng) * std::pow(10.0, exponent(rng)),
+                   unit(rng) * std::pow(10.0, exponent(rng)));
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<double> specials{
+      0.0,    -0.0, 1.0,  -1.0, 0.41421356237309503, -0.4142135623730951, 1e300, -1e-300, 4.9e-324,
+      2e-310, inf,  -inf, nan};
+  for (double x : specials)
+    for (double y : specials)
+      for (double z : {0.0, -0.0, 1.0, -2.5, 1e300, 3e-320, nan}) v.emplace_back(x, y, z);
+  const std::size_t n = v.size();  // not a multiple of any lane count
+  ASSERT_NE(n % 4, 0u);
+  std::vector<double> x(n), y(n), z(n), horizontal(n), length(n), up(n), around(n);
+  for (std::size_t i = 0; i < n; ++i) x[i] = v[i].x(), y[i] = v[i].y(), z[i] = v[i].z();
+  detail::direction_angles(n, x.data(), y.data(), z.data(), horizontal.data(), length.data(),
+                           up.data(), around.data());
+  const auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double h2 = x[i] * x[i] + y[i] * y[i], h = std::sqrt(h2);
+    const bool all = same(horizontal[i], h) && same(length[i], std::sqrt(h2 + z[i] * z[i])) &&
+                     same(up[i], detail::polynomial_atan2(z[i], h)) &&
+                     same(around[i], detail::polynomial_atan2(y[i], x[i]));
+    if (!all && ++differ <= 5)
+      ADD_FAILURE() << "vector (" << x[i] << ", " << y[i] << ", " << z[i] << "): up " << up[i]
+                    << " around " << around[i];
+  }
+  EXPECT_EQ(differ, 0u) << "of " << n;
 }
 
 // Each return lands in the bin its own direction is looked up in (has uses std::atan2,
