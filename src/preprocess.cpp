@@ -18,6 +18,7 @@
 #include <sstream>
 #include <vector>
 
+#include "cell_places.h"
 #include "parallel_for.h"
 #include "random_subset.h"
 #include "semioctree/octomap_ext/packed_key_map.h"
@@ -368,10 +369,12 @@ class CellBits {
       lo_[a] = cell_index(bounds.lo[a], inv);
       const std::int64_t cells = cell_index(bounds.hi[a], inv) - lo_[a] + 1;
       if (!(cells > 0 && cells < (std::int64_t(1) << 21))) return;
+      if (!(std::abs(lo_[a]) < (std::int64_t(1) << 52))) return;  // (detail::cell_places)
       blocks_[a] = std::uint64_t(cells + 7) / 8;
       blocks *= double(blocks_[a]);
     }
-    if (blocks * sizeof(std::uint32_t) > double(budget)) return;
+    // (detail::cell_places computes the index's places in 32 bits.)
+    if (blocks * sizeof(std::uint32_t) > double(budget) || blocks >= 0x1p32) return;
     // Zeroed pages from the system (calloc): only those the points' blocks reach are
     // touched.
     index_.reset(static_cast<std::uint32_t*>(std::calloc(std::size_t(blocks), 4)));
@@ -380,23 +383,33 @@ class CellBits {
     budget_ = budget;
   }
   bool valid() const { return index_size_ > 0; }
-  // Sets the cell of q, a finite point within the bounds; false once the blocks set
-  // outgrow the budget (only a new block may). No branch hangs on whether the cell was
-  // set before (a scan's points revisit cells unpredictably): size() counts the bits.
-  bool insert(const pcl::PointXYZ& q) {
-    const float v[3] = {q.x, q.y, q.z};
-    std::uint64_t c[3];
-    for (int a = 0; a < 3; ++a) c[a] = std::uint64_t(cell_index(v[a], inv_) - lo_[a]);
-    const std::size_t at = (c[0] >> 3) + blocks_[0] * ((c[1] >> 3) + blocks_[1] * (c[2] >> 3));
-    std::uint32_t& block = index_[at];
-    if (block == 0) {
-      bits_.resize(bits_.size() + 8, 0);
-      placed_.push_back(at);
-      block = std::uint32_t(placed_.size());
-      if (!within_budget()) return false;
+  // Sets the cells of the points buffered by add(), a finite point within the bounds each;
+  // false once the blocks set outgrow the budget (only a new block may). No branch hangs on
+  // whether a cell was set before (a scan's points revisit cells unpredictably): size()
+  // counts the bits.
+  bool add(const pcl::PointXYZ& q) {
+    x_[buffered_] = q.x, y_[buffered_] = q.y, z_[buffered_] = q.z;
+    return ++buffered_ < kBatch || flush();
+  }
+  // Sets the cells of the points buffered; false as add().
+  bool flush() {
+    const double lo[3] = {double(lo_[0]), double(lo_[1]), double(lo_[2])};
+    const std::uint32_t blocks[2] = {std::uint32_t(blocks_[0]), std::uint32_t(blocks_[1])};
+    std::uint32_t at[kBatch];
+    std::uint8_t word[kBatch], bit[kBatch];
+    detail::cell_places(buffered_, x_, y_, z_, inv_, lo, blocks, at, word, bit);
+    const std::size_t n = buffered_;
+    buffered_ = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+      std::uint32_t& block = index_[at[j]];
+      if (block == 0) {
+        bits_.resize(bits_.size() + 8, 0);
+        placed_.push_back(at[j]);
+        block = std::uint32_t(placed_.size());
+        if (!within_budget()) return false;
+      }
+      bits_[std::size_t(block - 1) * 8 + word[j]] |= std::uint64_t(1) << bit[j];
     }
-    bits_[std::size_t(block - 1) * 8 + (c[2] & 7)] |= std::uint64_t(1)
-                                                      << ((c[0] & 7) | (c[1] & 7) << 3);
     return true;
   }
   // The cells set.
@@ -434,6 +447,9 @@ class CellBits {
   std::size_t index_size_ = 0;
   std::vector<std::uint64_t> bits_;  // 8 words a block set: word z, bit x + 8·y within it
   std::vector<std::size_t> placed_;  // per block set: its place in the index
+  static constexpr std::size_t kBatch = 256;
+  float x_[kBatch], y_[kBatch], z_[kBatch];  // points added, their cells not set yet
+  std::size_t buffered_ = 0;
 
   // Whether the blocks set so far keep the set within its budget.
   bool within_budget() const {
@@ -483,10 +499,11 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
         CellBits& set = sets[w];
         each_point(size * w / workers, size * (w + 1) / workers,
                    [&](std::size_t, const pcl::PointXYZ& q) {
-                     if (!finite(q) || set.insert(q)) return true;
+                     if (!finite(q) || set.add(q)) return true;
                      fits[w] = 0;
                      return false;
                    });
+        if (fits[w] && !set.flush()) fits[w] = 0;
       });
       if (std::all_of(fits.begin(), fits.end(), [](std::uint8_t f) { return f != 0; })) {
         tables.clear();
