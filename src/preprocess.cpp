@@ -18,7 +18,7 @@
 #include <sstream>
 #include <vector>
 
-#include "cell_places.h"
+#include "cell_lanes.h"
 #include "parallel_for.h"
 #include "random_subset.h"
 #include "semioctree/octomap_ext/packed_key_map.h"
@@ -619,14 +619,35 @@ float CellThinning::centre_offset2(const pcl::PointXYZ& p) const {
 }
 
 void CellThinning::add(const pcl::PointXYZ& q) {
+  if (!finite(q)) return;
+  Pending& p = pending_;
+  p.points[p.size] = q;
+  p.x[p.size] = q.x, p.y[p.size] = q.y, p.z[p.size] = q.z;
+  if (++p.size == kBatch) place_pending();
+}
+
+void CellThinning::place_pending() {
+  Pending& p = pending_;
+  std::uint64_t keys[kBatch];
+  float offsets2[kBatch];
+  std::uint8_t wide[kBatch];
+  detail::cell_keys(p.size, p.x, p.y, p.z, inv_, keys, offsets2, wide);
+  for (std::size_t j = 0; j < p.size; ++j) {
+    const pcl::PointXYZ& q = p.points[j];
+    if (wide[j])
+      place(q, cell_key(q, inv_), centre_offset2(q));
+    else
+      place(q, keys[j], offsets2[j]);
+  }
+  p.size = 0;
+}
+
+void CellThinning::place(const pcl::PointXYZ& q, std::uint64_t key, float o2) {
   // Per cell, the index of its point in kept_ and that point's squared distance from the
   // cell's centre (in cells); a point nearer the centre replaces it (PCL's UniformSampling
   // keeps the same points, at three times the time: docs/data-flow.md, "Decimation").
-  if (!finite(q)) return;
   // A cell's index never changes once given, so recent_ may answer for slot_.
   Cloud& kept = *kept_;
-  const std::uint64_t key = cell_key(q, inv_);
-  const float o2 = centre_offset2(q);
   std::uint32_t index;
   if (const std::uint32_t* known = recent_.find(key)) {
     index = *known;
@@ -646,11 +667,17 @@ void CellThinning::add(const pcl::PointXYZ& q) {
   }
 }
 
+const Cloud& CellThinning::cloud() {
+  place_pending();
+  return *kept_;
+}
+
 void CellThinning::add(const Cloud& points) {
   for (const pcl::PointXYZ& q : points) add(q);
 }
 
 Cloud::Ptr CellThinning::release() {
+  place_pending();
   Cloud::Ptr out = std::move(kept_);
   out->points.shrink_to_fit();  // grown by doubling: up to twice what it holds
   empty();
@@ -663,20 +690,38 @@ void CellThinning::empty() {
   slot_.clear();
   recent_.forget_all();
   offset2_ = {};
+  pending_.size = 0;
 }
 
 void CellThinning::release_after(Cloud& earlier) {
   // Each of earlier's points is the first of its cell in the union's order, so it stays
   // unless this thinning's point of that cell is strictly nearer the centre (add keeps the
   // earlier on ties); the cells earlier holds are taken off what follows it.
+  place_pending();
   Cloud& kept = *kept_;
   std::vector<std::uint8_t> taken(kept.size(), 0);
-  for (pcl::PointXYZ& p : earlier.points) {
-    if (!finite(p)) continue;
-    const std::uint32_t* slot = slot_.find(cell_key(p, inv_));
-    if (!slot) continue;
-    taken[*slot] = 1;
-    if (offset2_[*slot] < centre_offset2(p)) p = kept[*slot];
+  // A batch of earlier's points at a time, their cells worked out as add's (the pending
+  // points' arrays, empty now, hold their coordinates).
+  Pending& b = pending_;
+  std::uint64_t keys[kBatch];
+  float offsets2[kBatch];
+  std::uint8_t wide[kBatch];
+  for (std::size_t begin = 0; begin < earlier.size(); begin += kBatch) {
+    const std::size_t n = std::min(kBatch, earlier.size() - begin);
+    for (std::size_t j = 0; j < n; ++j) {
+      const pcl::PointXYZ& p = earlier[begin + j];
+      const bool f = finite(p);  // (a non-finite point is skipped below)
+      b.x[j] = f ? p.x : 0.0f, b.y[j] = f ? p.y : 0.0f, b.z[j] = f ? p.z : 0.0f;
+    }
+    detail::cell_keys(n, b.x, b.y, b.z, inv_, keys, offsets2, wide);
+    for (std::size_t j = 0; j < n; ++j) {
+      pcl::PointXYZ& p = earlier[begin + j];
+      if (!finite(p)) continue;
+      const std::uint32_t* slot = slot_.find(wide[j] ? cell_key(p, inv_) : keys[j]);
+      if (!slot) continue;
+      taken[*slot] = 1;
+      if (offset2_[*slot] < (wide[j] ? centre_offset2(p) : offsets2[j])) p = kept[*slot];
+    }
   }
   earlier.reserve(earlier.size() + std::size_t(std::count(taken.begin(), taken.end(), 0)));
   for (std::size_t i = 0; i < kept.size(); ++i)

@@ -287,10 +287,20 @@ TEST(Preprocess, SpacingSearchStopsInTheWindowOrWhereTheCountsContradict) {
 
 // decimate keeps, of each cell, the point nearest its centre: checked against a plain
 // map of every cell's points, on a noisy room and with points outside the cells' grid.
+// Points 200 000 km out along x (a float's step is 16 m there), a few to a cell along y and
+// z: at spacings finer than 0.09 m their cells' indices pass 2^31, where the cells are
+// worked out one point at a time rather than in lanes (cell_keys' `wide`).
+void add_far_points(Cloud& cloud, float y0) {
+  for (const float x : {2e8f, 2e8f + 16.f, -2e8f, -2e8f - 32.f})
+    for (int k = 0; k < 12; ++k)
+      cloud.push_back(pcl::PointXYZ{x, y0 + 0.0031f * float(k), -40.f + 0.0067f * float(k)});
+}
+
 TEST(Preprocess, DecimateKeepsThePointNearestEachCellCentre) {
   auto room = testing::synthetic_room(4, 3, 2.5, 0.013, 0.004);
   room->push_back(pcl::PointXYZ{std::nanf(""), 0.f, 0.f});  // dropped
   room->push_back(pcl::PointXYZ{-3.3f, 2.1f, 0.7f});        // alone in its cell
+  add_far_points(*room, 1.0f);
   for (double spacing : {0.021, 0.05, 0.3}) {
     std::map<std::tuple<long, long, long>, std::pair<double, pcl::PointXYZ>> nearest;
     for (const auto& q : *room) {
@@ -327,6 +337,8 @@ TEST(Preprocess, ThinningCloudByCloudEqualsDecimatingTheirUnion) {
   const auto a = testing::synthetic_room(5, 4, 2.6, 0.017, 0.003);
   auto b = testing::synthetic_room(5, 4, 2.6, 0.023, 0.003);
   for (auto& q : *b) q.x += 1.3f;  // overlaps a, and reaches past it
+  add_far_points(*a, 1.0f);
+  add_far_points(*b, 1.002f);  // the same far cells, other points in them
   Cloud both = *a;
   both += *b;
   const Cloud::Ptr at_once = decimate(both, 0.04);

@@ -100,7 +100,8 @@ Cloud::Ptr decimate(const Cloud& cloud, double spacing);
 // decimate, a cloud at a time: after add(a), add(b), ... cloud() is decimate(a + b + ...)
 // (the same points in the same order), each add costing its own points only. Keeps the
 // cells' table (12 bytes a slot, a slot or two a point kept) and, in front of it, the
-// last 4 096 cells met (48 KB).
+// last 4 096 cells met (48 KB). Points added are placed 256 at a time (their cells worked
+// out lanes at a time), and before cloud(), release() and release_after() read the result.
 class CellThinning {
  public:
   explicit CellThinning(double spacing);       // spacing > 0, else std::invalid_argument
@@ -110,7 +111,7 @@ class CellThinning {
   CellThinning& operator=(CellThinning&&) = default;
   void add(const Cloud& points);
   void add(const pcl::PointXYZ& point);  // one point (a non-finite one is skipped)
-  const Cloud& cloud() const { return *kept_; }
+  const Cloud& cloud();                  // the points kept so far
   Cloud::Ptr release();  // the kept cloud, handed over (the thinning is empty after)
   // What thinning `earlier` and then the points added here keeps, written into `earlier`
   // in place. `earlier` must hold one point per cell of this spacing, in the order their
@@ -123,13 +124,21 @@ class CellThinning {
   double spacing() const { return 1.0 / inv_; }
 
  private:
-  float centre_offset2(const pcl::PointXYZ& p) const;  // squared, in cells
-  void empty();                                        // as constructed
+  float centre_offset2(const pcl::PointXYZ& p) const;                    // squared, in cells
+  void empty();                                                          // as constructed
+  void place(const pcl::PointXYZ& q, std::uint64_t key, float offset2);  // q of that cell
+  void place_pending();  // the points added and not placed yet, in order
   double inv_;
   PackedKeyMap<std::uint32_t> slot_;  // cell → index of its point in kept_
   RecentKeys<std::uint32_t> recent_;  // the cells of the last points, in front of slot_
   std::vector<float> offset2_;        // per kept point: squared distance from its cell's centre
   Cloud::Ptr kept_;
+  static constexpr std::size_t kBatch = 256;
+  struct Pending {  // points added, not placed yet (finite)
+    pcl::PointXYZ points[kBatch];
+    float x[kBatch], y[kBatch], z[kBatch];
+    std::size_t size = 0;
+  } pending_;
 };
 // Number of cells of side `spacing` (world-aligned, as decimate's) holding a point of
 // `cloud`, exactly, with tables of about `cap` keys at most: beyond that (a spacing much

@@ -1,4 +1,4 @@
-#include "cell_places.h"
+#include "cell_lanes.h"
 
 #include <cmath>
 
@@ -24,6 +24,30 @@ void cell_places(std::size_t n, const float* __restrict x, const float* __restri
     block[j] = std::uint32_t(c0 >> 3) + bx * (std::uint32_t(c1 >> 3) + by * std::uint32_t(c2 >> 3));
     word[j] = std::uint8_t(c2 & 7);
     bit[j] = std::uint8_t((c0 & 7) | (c1 & 7) << 3);
+  }
+}
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+void cell_keys(std::size_t n, const float* __restrict x, const float* __restrict y,
+               const float* __restrict z, double inv, std::uint64_t* __restrict key,
+               float* __restrict offset2, std::uint8_t* __restrict wide) {
+  constexpr double kNarrow = 0x1p31;  // floors below this in magnitude fit an int32
+  constexpr std::uint32_t kMask = (std::uint32_t(1) << 21) - 1;
+  for (std::size_t j = 0; j < n; ++j) {
+    const double tx = double(x[j]) * inv, ty = double(y[j]) * inv, tz = double(z[j]) * inv;
+    const double fx = std::floor(tx), fy = std::floor(ty), fz = std::floor(tz);
+    const double dx = tx - fx - 0.5, dy = ty - fy - 0.5, dz = tz - fz - 0.5;
+    offset2[j] = float(dx * dx + dy * dy + dz * dz);
+    const bool narrow =
+        std::fabs(fx) < kNarrow && std::fabs(fy) < kNarrow && std::fabs(fz) < kNarrow;
+    wide[j] = std::uint8_t(!narrow);
+    // A floor's low 21 bits, which pack_cell_parts keeps, are its int32's.
+    const auto low = [&](double f) {
+      return std::uint64_t(std::uint32_t(std::int32_t(narrow ? f : 0.0)) & kMask);
+    };
+    key[j] = (low(fx) << 42) | (low(fy) << 21) | low(fz);
   }
 }
 
