@@ -770,9 +770,12 @@ Visibility best_across(const ViewLimits& lim, Label l, const octomap::OcTreeKey&
 constexpr double kEndTolerance = 1e-9;
 
 // kMarked: the tree's marks are fresh (study_occlusion), so refined space
-// without blockers can be crossed in one step.
+// without blockers can be crossed in one step. `direct_or_not`: only whether p is seen
+// directly matters; a segment that crosses an opening then ends there, as kThroughOpening
+// whatever lies beyond (it can no longer be direct).
 template <bool kMarked>
-Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, const Point3& p) {
+Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, const Point3& p,
+                              bool direct_or_not = false) {
   const Point3& o = lim.view->position;
   const double dx = p.x - o.x, dy = p.y - o.y, dz = p.z - o.z;
   if (!lim.range_and_elevation.in_view(o, p)) return Visibility::kHidden;
@@ -789,7 +792,7 @@ Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, con
       return false;
     }
     through_opening |= best_across(lim, l, s.key, s.level) == Visibility::kThroughOpening;
-    return true;
+    return !(through_opening && direct_or_not);
   };
   if (kMarked)
     tree.traverse_marked(o, p, visit);
@@ -799,7 +802,9 @@ Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, con
   return through_opening ? Visibility::kThroughOpening : Visibility::kDirect;
 }
 
-// The best visibility of p from `views`, and in `view` the first view giving it.
+// The best visibility of p from `views`, and in `view` the first view giving it. Once a
+// view sees p through an opening, a later one can only do better by seeing it directly, so
+// its segment stops at the first opening it crosses (the result is the same).
 template <bool kMarked>
 Visibility best_visibility(const SemiOcTree& tree, const std::vector<ViewLimits>& views,
                            const Point3& p, std::size_t& segments, std::uint32_t& view) {
@@ -807,7 +812,8 @@ Visibility best_visibility(const SemiOcTree& tree, const std::vector<ViewLimits>
   view = 0;
   for (std::size_t i = 0; i < views.size(); ++i) {
     ++segments;
-    const Visibility v = segment_visibility<kMarked>(tree, views[i], p);
+    const Visibility v =
+        segment_visibility<kMarked>(tree, views[i], p, best == Visibility::kThroughOpening);
     if (v > best) {
       best = v;
       view = std::uint32_t(i);
