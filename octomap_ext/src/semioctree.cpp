@@ -204,22 +204,6 @@ float SemiOcTree::log_odds_for(Label label) const {
   }
 }
 
-Octant SemiOcTree::make_octant(const octomap::OcTreeKey& key, unsigned level,
-                               const SemiOcTreeNode* node) const {
-  Octant o;
-  const unsigned shift = leaf_level_ - level;
-  const unsigned mask = ~((1u << shift) - 1u);
-  for (int i = 0; i < 3; ++i) o.key.k[i] = static_cast<octomap::key_type>(key.k[i] & mask);
-  o.level = level;
-  o.size = octant_size(level);
-  const double half = 0.5 * o.size;
-  o.center = Point3((double(o.key.k[0]) - double(kKeyOrigin)) * resolution + half,
-                    (double(o.key.k[1]) - double(kKeyOrigin)) * resolution + half,
-                    (double(o.key.k[2]) - double(kKeyOrigin)) * resolution + half);
-  o.node = node;
-  return o;
-}
-
 std::optional<Octant> SemiOcTree::find_octant(const octomap::OcTreeKey& key) const {
   const SemiOcTreeNode* node = find_coarse(coarse_index(key));
   if (!node) return std::nullopt;

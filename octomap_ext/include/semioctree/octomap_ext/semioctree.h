@@ -180,8 +180,8 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
   // Occupancy log-odds stored with each label (OctoMap readers see these).
   float log_odds_for(Label label) const;
 
-  Octant make_octant(const octomap::OcTreeKey& key, unsigned level,
-                     const SemiOcTreeNode* node) const;
+  inline Octant make_octant(const octomap::OcTreeKey& key, unsigned level,
+                            const SemiOcTreeNode* node) const;
   // Calls f(const Octant&) for every leaf octant, in OctoMap's depth-first order.
   template <class F>
   void for_each_octant(F&& f) const;
@@ -311,6 +311,10 @@ class SemiOcTree : public octomap::OccupancyOcTreeBase<SemiOcTreeNode> {
 
  private:
   struct SegmentFrame;  // per-segment constants of traverse()
+  // for_each_octant over the subtree of `node` (at `depth`, minimum-corner key `key`).
+  template <class F>
+  void for_each_octant_below(const SemiOcTreeNode* node, unsigned depth,
+                             const octomap::OcTreeKey& key, F& f) const;
   template <bool kMarkedOnly, class Visitor>
   TraversalEnd traverse_impl(const Point3& a, const Point3& b, Visitor& visit) const;
   template <bool kMarkedOnly, class Visitor>

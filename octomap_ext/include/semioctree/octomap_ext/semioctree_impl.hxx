@@ -45,14 +45,37 @@ void SemiOcTree::for_each_coarse(F&& f) const {
 
 template <class F>
 void SemiOcTree::for_each_octant(F&& f) const {
-  if (!root) return;
-  const unsigned cd = coarse_depth();
-  auto visit = [&](const SemiOcTreeNode* node, unsigned depth, const octomap::OcTreeKey& key) {
-    if (nodeHasChildren(node)) return true;
-    if (depth >= cd) f(make_octant(key, depth - cd, node));
-    return false;
-  };
-  detail::walk_depth_first(*this, root, 0, octomap::OcTreeKey(0, 0, 0), visit);
+  if (root) for_each_octant_below(root, 0, octomap::OcTreeKey(0, 0, 0), f);
+}
+
+template <class F>
+void SemiOcTree::for_each_octant_below(const SemiOcTreeNode* node, unsigned depth,
+                                       const octomap::OcTreeKey& key, F& f) const {
+  // A node without children is a leaf octant (below the coarse depth): its children are
+  // visited, else it is.
+  bool parent = false;
+  for (unsigned i = 0; i < 8; ++i)
+    if (nodeChildExists(node, i)) {
+      parent = true;
+      for_each_octant_below(getNodeChild(node, i), depth + 1, detail::child_key(key, depth, i), f);
+    }
+  if (!parent && depth >= coarse_depth()) f(make_octant(key, depth - coarse_depth(), node));
+}
+
+inline Octant SemiOcTree::make_octant(const octomap::OcTreeKey& key, unsigned level,
+                                      const SemiOcTreeNode* node) const {
+  Octant o;
+  const unsigned shift = leaf_level_ - level;
+  const unsigned mask = ~((1u << shift) - 1u);
+  for (int i = 0; i < 3; ++i) o.key.k[i] = static_cast<octomap::key_type>(key.k[i] & mask);
+  o.level = level;
+  o.size = resolution * double(1u << shift);
+  const double half = 0.5 * o.size;
+  o.center = Point3((double(o.key.k[0]) - double(kKeyOrigin)) * resolution + half,
+                    (double(o.key.k[1]) - double(kKeyOrigin)) * resolution + half,
+                    (double(o.key.k[2]) - double(kKeyOrigin)) * resolution + half);
+  o.node = node;
+  return o;
 }
 
 // Traversal. Positions are in leaf-cell units relative to the world origin
