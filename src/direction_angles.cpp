@@ -1,5 +1,6 @@
 #include "direction_angles.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "polynomial_atan2.h"
@@ -62,6 +63,33 @@ void direction_angles(std::size_t n, const double* __restrict x, const double* _
   for (std::size_t i = 0; i < n; ++i) {
     if (!unscaled(larger(z[i], horizontal[i]))) up[i] = polynomial_atan2(z[i], horizontal[i]);
     if (!unscaled(larger(y[i], x[i]))) around[i] = polynomial_atan2(y[i], x[i]);
+  }
+}
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+void direction_bins(std::size_t n, const double* __restrict up, const double* __restrict around,
+                    int per_degree, int rows, const int* __restrict count,
+                    const int* __restrict first, int* __restrict bin,
+                    std::uint8_t* __restrict edge) {
+  constexpr double e = kPolynomialAtan2Error;
+  // The maps of occlusion.cpp's DirectionBins (elevation_of, row, fraction_of, column),
+  // operation for operation.
+  const auto row = [&](double u) {
+    return std::clamp(int((u * (180.0 / M_PI) + 90.0) * per_degree), 0, rows - 1);
+  };
+  const auto column = [](double a, int c) {
+    return std::clamp(int((a + M_PI) / (2 * M_PI) * c), 0, c - 1);
+  };
+  for (std::size_t j = 0; j < n; ++j) {
+    // Angles lie within ±π (not finite: a zero or non-finite vector, worked out alone).
+    const bool finite = std::fabs(up[j]) <= 4.0 && std::fabs(around[j]) <= 4.0;
+    const double u = finite ? up[j] : 0.0, a = finite ? around[j] : 0.0;
+    const int r = row(u - e), c_count = count[r];
+    const int c = column(a - e, c_count);
+    bin[j] = first[r] + c;
+    edge[j] = std::uint8_t(!finite || r != row(u + e) || c != column(a + e, c_count));
   }
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 
 namespace semioctree::detail {
 
@@ -15,5 +16,18 @@ namespace semioctree::detail {
 void direction_angles(std::size_t n, const double* __restrict x, const double* __restrict y,
                       const double* __restrict z, double* __restrict horizontal,
                       double* __restrict length, double* __restrict up, double* __restrict around);
+
+// The bins of directions given by their polynomial angles (up[j], around[j], as
+// direction_angles computes them, within kPolynomialAtan2Error of std::atan2's), among
+// bins of `per_degree` rows a degree of elevation (`rows` in all), row r holding count[r]
+// bins of azimuth from bin first[r] on: bin[j] = first[r] + c, r the row of elevation
+// (up + π/2) in degrees · per_degree, c the column of (around + π) / 2π · count[r], each
+// truncated and clamped to its range. edge[j] is 1 where up or around ± the bound falls
+// in another row or column (std::atan2 must decide) or is not finite, and bin[j] is then
+// to be worked out alone; else 0.
+void direction_bins(std::size_t n, const double* __restrict up, const double* __restrict around,
+                    int per_degree, int rows, const int* __restrict count,
+                    const int* __restrict first, int* __restrict bin,
+                    std::uint8_t* __restrict edge);
 
 }  // namespace semioctree::detail

@@ -79,14 +79,27 @@ struct DirectionBins {
     void compute(std::size_t n) {
       detail::direction_angles(n, x, y, z, horizontal, length, up, around);
     }
+    // Whether vector j has angles (Angles::of's test).
+    bool valid(std::size_t j) const { return std::isfinite(length[j]) && length[j] > 0; }
     // Vector j's angles; false as Angles::of.
     bool get(std::size_t j, Angles& a) const {
-      if (!(std::isfinite(length[j]) && length[j] > 0)) return false;
+      if (!valid(j)) return false;
       a.dx = x[j], a.dy = y[j], a.dz = z[j];
       a.horizontal = horizontal[j], a.length = length[j], a.up = up[j], a.around = around[j];
       return true;
     }
   };
+  // bin_of for the first n angles of a batch, lanes at a time (detail::direction_bins); a
+  // lane whose margin straddles an edge, or whose vector has no angles, is worked out
+  // alone (an invalid one's bin is not to be used).
+  void bins_of(const AngleBatch& b, std::size_t n, int* bin) const {
+    std::uint8_t edge[AngleBatch::kSize];
+    detail::direction_bins(n, b.up, b.around, per_degree, rows, count.data(), first.data(), bin,
+                           edge);
+    Angles a;
+    for (std::size_t j = 0; j < n; ++j)
+      if (edge[j] && b.get(j, a)) bin[j] = bin_of(a);
+  }
   // bin(d) of direction(dx, dy, dz, d) from the polynomial angles: their value ± their
   // error bound maps to one row (one column) whenever std::atan2's would give the same one
   // (the maps below only round and scale: they never decrease), so only where that margin
@@ -420,9 +433,9 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
   depth_cm_.clear();
   const unsigned workers = detail::thread_count(threads);
   const std::size_t chunk = 1 << 16, chunks = (scan.size() + chunk - 1) / chunk;
-  // f(angles) for each return of chunk c, in the map frame: Angles::of's values, a batch
-  // of returns at a time (direction_angles).
-  auto each_return = [&](std::size_t c, auto&& f) {
+  // f(batch, n) for the returns of chunk c, in the map frame, a batch of n at a time, their
+  // angles computed (Angles::of's values; AngleBatch::get tells the returns with angles).
+  auto each_batch = [&](std::size_t c, auto&& f) {
     DirectionBins::AngleBatch batch;
     for (std::size_t i = c * chunk, end = std::min(scan.size(), i + chunk); i < end;) {
       const std::size_t n = std::min(end - i, DirectionBins::AngleBatch::kSize);
@@ -431,9 +444,7 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
         batch.x[j] = v.x(), batch.y[j] = v.y(), batch.z[j] = v.z();
       }
       batch.compute(n);
-      DirectionBins::Angles a;
-      for (std::size_t j = 0; j < n; ++j)
-        if (batch.get(j, a)) f(a);
+      f(batch, n);
     }
   };
   // The depths, per bin of k a degree: the nearest and farthest return and their count
@@ -447,12 +458,16 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
       farthest.assign(std::size_t(bins.total), 0.0f);
       count.assign(std::size_t(bins.total), 0);
     }
-    void add(const DirectionBins& bins, const DirectionBins::Angles& a) {
-      const auto b = std::size_t(bins.bin_of(a));
-      const auto range = float(a.length);
-      nearest[b] = std::min(nearest[b], range);
-      farthest[b] = std::max(farthest[b], range);
-      if (count[b] < 255) ++count[b];
+    // The returns of a batch with angles, their bins in `bins` (as bins_of gives them).
+    void add(const DirectionBins::AngleBatch& batch, std::size_t n, const int* bins) {
+      for (std::size_t j = 0; j < n; ++j) {
+        if (!batch.valid(j)) continue;
+        const auto b = std::size_t(bins[j]);
+        const auto range = float(batch.length[j]);
+        nearest[b] = std::min(nearest[b], range);
+        farthest[b] = std::max(farthest[b], range);
+        if (count[b] < 255) ++count[b];
+      }
     }
   };
   // Pass 1: the 1° bins with returns, and how many returns they hold. With the depths'
@@ -471,11 +486,19 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
     if (gather_depths) per_worker[w].size_for(expected_bins);
     // Counted here, added once a chunk: the workers' counts share a cache line.
     std::size_t chunk_returns = 0;
-    each_return(c, [&](const DirectionBins::Angles& a) {
-      float& n = nearest[w][std::size_t(degree.bin_of(a))];
-      n = std::min(n, float(a.length));
-      ++chunk_returns;
-      if (gather_depths) per_worker[w].add(expected_bins, a);
+    each_batch(c, [&](const DirectionBins::AngleBatch& batch, std::size_t n) {
+      int bins[DirectionBins::AngleBatch::kSize];
+      degree.bins_of(batch, n, bins);
+      for (std::size_t j = 0; j < n; ++j) {
+        if (!batch.valid(j)) continue;
+        float& near = nearest[w][std::size_t(bins[j])];
+        near = std::min(near, float(batch.length[j]));
+        ++chunk_returns;
+      }
+      if (gather_depths) {
+        expected_bins.bins_of(batch, n, bins);
+        per_worker[w].add(batch, n, bins);
+      }
     });
     returns[w] += chunk_returns;
   });
@@ -503,7 +526,11 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
     per_worker.assign(workers, Depths{});
     detail::parallel_for(chunks, workers, 1, [&](std::size_t c, unsigned w) {
       per_worker[w].size_for(bins);
-      each_return(c, [&](const DirectionBins::Angles& a) { per_worker[w].add(bins, a); });
+      each_batch(c, [&](const DirectionBins::AngleBatch& batch, std::size_t n) {
+        int at[DirectionBins::AngleBatch::kSize];
+        bins.bins_of(batch, n, at);
+        per_worker[w].add(batch, n, at);
+      });
     });
   }
   constexpr int kMinReturns = 4;
