@@ -667,6 +667,12 @@ void CellThinning::place(const pcl::PointXYZ& q, std::uint64_t key, float o2) {
   }
 }
 
+void CellThinning::reserve(std::size_t cells) {
+  slot_.reserve(cells);
+  kept_->reserve(cells);
+  offset2_.reserve(cells);
+}
+
 const Cloud& CellThinning::cloud() {
   place_pending();
   return *kept_;
@@ -1015,8 +1021,16 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     // CellThinning keeps what decimating their union keeps, whatever the threads.
     const std::size_t shares =
         std::max<std::size_t>(1, std::min<std::size_t>(threads, input.size() / kMinThreadShare));
+    // The cells the search counted at this spacing (if it did): each share's table sized
+    // for its part of them at once, not grown by doubling.
+    std::size_t cells = 0;
+    for (const auto& [s, n] : r.spacing_counts)
+      if (s == spacing) cells = n;
     std::vector<CellThinning> thinned;
-    for (std::size_t k = 0; k < shares; ++k) thinned.emplace_back(spacing);
+    for (std::size_t k = 0; k < shares; ++k) {
+      thinned.emplace_back(spacing);
+      thinned.back().reserve(cells / shares);
+    }
     detail::parallel_for(shares, unsigned(shares), 1, [&](std::size_t k, unsigned) {
       each_cut_in(input.size() * k / shares, input.size() * (k + 1) / shares,
                   [&](std::size_t, const pcl::PointXYZ& v) {

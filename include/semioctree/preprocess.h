@@ -109,6 +109,9 @@ class CellThinning {
   CellThinning& operator=(const CellThinning&) = delete;
   CellThinning(CellThinning&&) = default;
   CellThinning& operator=(CellThinning&&) = default;
+  // Room for `cells` cells at once (the points kept are the same; the table is not grown
+  // by doubling on the way there).
+  void reserve(std::size_t cells);
   void add(const Cloud& points);
   void add(const pcl::PointXYZ& point);  // one point (a non-finite one is skipped)
   const Cloud& cloud();                  // the points kept so far
