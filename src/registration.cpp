@@ -6,9 +6,7 @@
 #include <pcl/common/transforms.h>
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/registration/icp.h>
-#include <pcl/registration/transformation_estimation_point_to_plane.h>
 #include <pcl/registration/transformation_estimation_point_to_plane_lls.h>
-#include <pcl/registration/warp_point_rigid_3d.h>
 
 #include <algorithm>
 #include <chrono>
@@ -21,6 +19,7 @@
 
 #include "kd_tree_n.h"
 #include "parallel_for.h"
+#include "planar_point_to_plane.h"
 #include "random_subset.h"
 #include "semioctree/timing.h"
 
@@ -389,13 +388,10 @@ RegistrationResult register_scan(const Cloud& source, const Cloud& target,
 
   Icp icp;
   if (p.planar) {
-    // x, y, yaw: point-to-plane error minimised by Levenberg-Marquardt over a
-    // 3-parameter warp (PCL has no closed-form 3-DoF point-to-plane estimator).
-    auto estimation = pcl::make_shared<
-        pcl::registration::TransformationEstimationPointToPlane<PointN, PointN, double>>();
-    estimation->setWarpFunction(
-        pcl::make_shared<pcl::registration::WarpPointRigid3D<PointN, PointN, double>>());
-    icp.setTransformationEstimation(estimation);
+    // x, y, yaw: the point-to-plane error linearised in the yaw, one 3 × 3 solve an
+    // iteration (PCL's 3-DoF warp is minimised by Levenberg-Marquardt, several times
+    // over every pair an iteration, to the same placements: docs/registration.md).
+    icp.setTransformationEstimation(pcl::make_shared<detail::PlanarPointToPlane>());
   } else {
     icp.setTransformationEstimation(
         pcl::make_shared<

@@ -7,7 +7,9 @@ if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/test_registration.cpp)
   else()
     semioctree_add_test(test_registration SOURCES test_registration.cpp LIBS semioctree)
   endif()
-  target_include_directories(test_registration PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+  # ${PROJECT_SOURCE_DIR}: ICP's planar step (src/planar_point_to_plane.h, header only).
+  target_include_directories(test_registration PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}
+                                                       ${PROJECT_SOURCE_DIR})
 endif()
 # The kd-tree of registration (src/kd_tree_n.h, header only, over nanoflann).
 semioctree_add_test(test_kd_tree SOURCES test_kd_tree.cpp LIBS semioctree)

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "semioctree/registration.h"
+#include "src/planar_point_to_plane.h"
 #include "support/synthetic_clouds.h"
 
 #ifdef SEMIOCTREE_HAVE_SIM
@@ -113,6 +114,76 @@ TEST(Registration, RecoversAKnownPlanarError) {
   // Planar: z, roll and pitch are left as levelled.
   EXPECT_NEAR(r.correction.translation().z(), 0.0, 1e-9);
   EXPECT_NEAR(r.correction.linear()(2, 2), 1.0, 1e-12);
+}
+
+// ICP's planar step (x, y, yaw; src/planar_point_to_plane.h). Points on three walls (their
+// normals along x, along y and at 30° between) and a floor, moved by a planar motion: a
+// step from the exact pairs takes it most of the way (the yaw's linearisation leaves its
+// second order), and a few steps to the floats' precision. Walls all facing x do not constrain y: the step leaves y where it
+// was. No pairs: no step.
+TEST(Registration, PlanarPointToPlaneStepRecoversAPlanarMotion) {
+  using detail::PlanarPointToPlane;
+  using CloudN = PlanarPointToPlane::CloudN;
+  CloudN target;
+  auto add = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
+    pcl::PointNormal q;
+    q.x = float(p.x()), q.y = float(p.y()), q.z = float(p.z());
+    q.normal_x = float(n.x()), q.normal_y = float(n.y()), q.normal_z = float(n.z());
+    target.push_back(q);
+  };
+  const Eigen::Vector3d slanted(std::cos(M_PI / 6), std::sin(M_PI / 6), 0);
+  for (int i = 0; i < 40; ++i)
+    for (int k = 0; k < 10; ++k) {
+      const double t = 0.1 * i, z = 0.25 * k;
+      add({4.0, t - 2.0, z}, {1, 0, 0});
+      add({t - 2.0, 3.0, z}, {0, 1, 0});
+      add(Eigen::Vector3d(-3.0, 0.0, z) + t * Eigen::Vector3d(-slanted.y(), slanted.x(), 0),
+          slanted);
+      add({t - 2.0, 0.1 * k - 0.5, 0.0}, {0, 0, 1});
+    }
+  // The source: the target moved by the inverse of the motion to recover.
+  const Eigen::Isometry3d motion = planar_pose(0.03, -0.02, 1.5);
+  auto moved = [](const CloudN& in, const Eigen::Isometry3d& t) {
+    CloudN out;
+    pcl::transformPointCloudWithNormals(in, out, t.matrix());
+    return out;
+  };
+  CloudN source = moved(target, motion.inverse());
+  const PlanarPointToPlane step;
+  Eigen::Matrix4d total = Eigen::Matrix4d::Identity();
+  for (int it = 0; it < 4; ++it) {
+    Eigen::Matrix4d m;
+    step.estimateRigidTransformation(source, target, m);
+    source = moved(source, Eigen::Isometry3d(m));
+    total = m * total;
+    if (it == 0) {  // 36 mm and 1.5° to go: what is left is the yaw's second order
+      const Size off = size_of(Eigen::Isometry3d(total).inverse() * motion);
+      EXPECT_LT(off.translation, 3e-3) << "one step";
+      EXPECT_LT(off.rotation_deg, 0.05) << "one step";
+    }
+    // A rotation about z alone, orthonormal, and no move along z.
+    EXPECT_EQ(m(2, 2), 1.0);
+    EXPECT_EQ(m(2, 3), 0.0);
+    EXPECT_NEAR(m(0, 0) * m(0, 0) + m(1, 0) * m(1, 0), 1.0, 1e-12);
+  }
+  const Size off = size_of(Eigen::Isometry3d(total).inverse() * motion);
+  EXPECT_LT(off.translation, 1e-5);  // (the points are floats)
+  EXPECT_LT(off.rotation_deg, 1e-4);
+
+  // Walls all facing x: y is not moved; x and the yaw still are.
+  CloudN facing_x;
+  for (const pcl::PointNormal& q : target)
+    if (q.normal_x == 1.0f) facing_x.push_back(q);
+  const CloudN facing_x_source = moved(facing_x, planar_pose(-0.02, 0.05, 0.5));
+  Eigen::Matrix4d m;
+  step.estimateRigidTransformation(facing_x_source, facing_x, m);
+  EXPECT_TRUE(m.allFinite());
+  EXPECT_EQ(m(1, 3), 0.0);
+  EXPECT_NEAR(std::atan2(m(1, 0), m(0, 0)) * kDeg, -0.5, 0.05);
+
+  // No pairs: no step.
+  step.estimateRigidTransformation(CloudN(), CloudN(), m);
+  EXPECT_TRUE(m.isIdentity());
 }
 
 TEST(Registration, SixDofRecoversTiltAndHeightToo) {
