@@ -2,14 +2,14 @@
 
 #include <cmath>
 
+#include "semioctree/octomap_ext/packed_key_map.h"
+#include "vector_clones.h"
+
 namespace semioctree::detail {
 
 // std::floor of the double product is the integer preprocessing's floor_to_int gives; here
-// in a loop the compiler runs on several points at once. On x86-64 it builds the loop for
-// AVX2 (4 lanes) and for the baseline, and the loader picks one.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("avx2", "default")))
-#endif
+// in a loop the compiler runs on several points at once.
+SEMIOCTREE_VECTOR_CLONES
 void cell_places(std::size_t n, const float* __restrict x, const float* __restrict y,
                  const float* __restrict z, double inv, const double lo[3],
                  const std::uint32_t blocks[2], std::uint32_t* __restrict block,
@@ -27,14 +27,11 @@ void cell_places(std::size_t n, const float* __restrict x, const float* __restri
   }
 }
 
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("avx2", "default")))
-#endif
+SEMIOCTREE_VECTOR_CLONES
 void cell_keys(std::size_t n, const float* __restrict x, const float* __restrict y,
                const float* __restrict z, double inv, std::uint64_t* __restrict key,
                float* __restrict offset2, std::uint8_t* __restrict wide) {
   constexpr double kNarrow = 0x1p31;  // floors below this in magnitude fit an int32
-  constexpr std::uint32_t kMask = (std::uint32_t(1) << 21) - 1;
   for (std::size_t j = 0; j < n; ++j) {
     const double tx = double(x[j]) * inv, ty = double(y[j]) * inv, tz = double(z[j]) * inv;
     const double fx = std::floor(tx), fy = std::floor(ty), fz = std::floor(tz);
@@ -43,11 +40,9 @@ void cell_keys(std::size_t n, const float* __restrict x, const float* __restrict
     const bool narrow =
         std::fabs(fx) < kNarrow && std::fabs(fy) < kNarrow && std::fabs(fz) < kNarrow;
     wide[j] = std::uint8_t(!narrow);
-    // A floor's low 21 bits, which pack_cell_parts keeps, are its int32's.
-    const auto low = [&](double f) {
-      return std::uint64_t(std::uint32_t(std::int32_t(narrow ? f : 0.0)) & kMask);
-    };
-    key[j] = (low(fx) << 42) | (low(fy) << 21) | low(fz);
+    // A floor's low bits, which pack_cell_parts keeps, are its int32's.
+    const auto low = [&](double f) { return std::uint32_t(std::int32_t(narrow ? f : 0.0)); };
+    key[j] = pack_cell_parts(low(fx), low(fy), low(fz));
   }
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "polynomial_atan2.h"
+#include "vector_clones.h"
 
 namespace semioctree::detail {
 
@@ -42,15 +43,10 @@ inline double unscaled_atan2(double y, double x) {
 
 }  // namespace
 
-// Two versions where the compiler can pick one at load time: 4 lanes with AVX2, 2 with
-// x86-64's SSE2. AVX2 alone brings no fused multiply-add, so both round alike.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("avx2", "default")))
-#endif
+SEMIOCTREE_VECTOR_CLONES
 void direction_angles(std::size_t n, const double* __restrict x, const double* __restrict y,
                       const double* __restrict z, double* __restrict horizontal,
-                      double* __restrict length, double* __restrict up,
-                      double* __restrict around) {
+                      double* __restrict length, double* __restrict up, double* __restrict around) {
   for (std::size_t i = 0; i < n; ++i) {
     const double h2 = x[i] * x[i] + y[i] * y[i];
     horizontal[i] = std::sqrt(h2);
@@ -66,22 +62,14 @@ void direction_angles(std::size_t n, const double* __restrict x, const double* _
   }
 }
 
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("avx2", "default")))
-#endif
+SEMIOCTREE_VECTOR_CLONES
 void direction_bins(std::size_t n, const double* __restrict up, const double* __restrict around,
                     int per_degree, int rows, const int* __restrict count,
                     const int* __restrict first, int* __restrict bin,
                     std::uint8_t* __restrict edge) {
   constexpr double e = kPolynomialAtan2Error;
-  // The maps of occlusion.cpp's DirectionBins (elevation_of, row, fraction_of, column),
-  // operation for operation.
-  const auto row = [&](double u) {
-    return std::clamp(int((u * (180.0 / M_PI) + 90.0) * per_degree), 0, rows - 1);
-  };
-  const auto column = [](double a, int c) {
-    return std::clamp(int((a + M_PI) / (2 * M_PI) * c), 0, c - 1);
-  };
+  const auto row = [&](double u) { return direction_row(elevation_degrees(u), per_degree, rows); };
+  const auto column = [](double a, int c) { return direction_column(turn_fraction(a), c); };
   for (std::size_t j = 0; j < n; ++j) {
     // Angles lie within ±π (not finite: a zero or non-finite vector, worked out alone).
     const bool finite = std::fabs(up[j]) <= 4.0 && std::fabs(around[j]) <= 4.0;

@@ -3,6 +3,8 @@
 // time, is half of that pass (docs/occlusion.md, "Reading a scan's returns").
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -16,6 +18,23 @@ namespace semioctree::detail {
 void direction_angles(std::size_t n, const double* __restrict x, const double* __restrict y,
                       const double* __restrict z, double* __restrict horizontal,
                       double* __restrict length, double* __restrict up, double* __restrict around);
+
+// The maps from a direction's angles to its bin (occlusion.cpp's DirectionBins, and
+// direction_bins below): its elevation (radians) in degrees above −90°, its azimuth
+// (radians, −π..π) as the fraction of the turn from −π; the row of an elevation among
+// `rows` rows of 1 / per_degree degree, and the column of a fraction among `count`.
+inline double elevation_degrees(double up) {
+  return up * (180.0 / M_PI) + 90.0;
+}
+inline double turn_fraction(double azimuth) {
+  return (azimuth + M_PI) / (2 * M_PI);
+}
+inline int direction_row(double elevation, int per_degree, int rows) {
+  return std::clamp(int(elevation * per_degree), 0, rows - 1);
+}
+inline int direction_column(double fraction, int count) {
+  return std::clamp(int(fraction * count), 0, count - 1);
+}
 
 // The bins of directions given by their polynomial angles (up[j], around[j], as
 // direction_angles computes them, within kPolynomialAtan2Error of std::atan2's), among

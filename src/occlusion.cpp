@@ -119,13 +119,13 @@ struct DirectionBins {
     return bin(d);
   }
   // The bin of row r holding azimuth fraction f ∈ [0, 1] (of the full turn from −180°).
-  int column(int r, double f) const { return std::clamp(int(f * count[r]), 0, count[r] - 1); }
-  int row(double elevation) const { return std::clamp(int(elevation * per_degree), 0, rows - 1); }
+  int column(int r, double f) const { return detail::direction_column(f, count[r]); }
+  int row(double elevation) const { return detail::direction_row(elevation, per_degree, rows); }
   static double fraction(double dx, double dy) { return fraction_of(std::atan2(dy, dx)); }
   // An azimuth (radians, −π..π) as the fraction of the turn from −π; an elevation
   // (radians) as degrees above −90°.
-  static double fraction_of(double azimuth) { return (azimuth + M_PI) / (2 * M_PI); }
-  static double elevation_of(double up) { return up * (180.0 / M_PI) + 90.0; }
+  static double fraction_of(double azimuth) { return detail::turn_fraction(azimuth); }
+  static double elevation_of(double up) { return detail::elevation_degrees(up); }
   // The centre elevation of row r (radians), and the centre azimuth fraction of its bin i.
   double row_elevation(int r) const { return ((r + 0.5) / per_degree - 90.0) * M_PI / 180.0; }
   double centre_fraction(int r, int i) const { return (i + 0.5) / count[r]; }

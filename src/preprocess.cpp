@@ -383,10 +383,10 @@ class CellBits {
     budget_ = budget;
   }
   bool valid() const { return index_size_ > 0; }
-  // Sets the cells of the points buffered by add(), a finite point within the bounds each;
-  // false once the blocks set outgrow the budget (only a new block may). No branch hangs on
-  // whether a cell was set before (a scan's points revisit cells unpredictably): size()
-  // counts the bits.
+  // Adds the cell of q, a finite point within the bounds: buffered, the buffer's cells set
+  // when it fills (flush). False once the blocks set outgrow the budget (only a new block
+  // may). No branch hangs on whether a cell was set before (a scan's points revisit cells
+  // unpredictably): size() counts the bits.
   bool add(const pcl::PointXYZ& q) {
     x_[buffered_] = q.x, y_[buffered_] = q.y, z_[buffered_] = q.z;
     return ++buffered_ < kBatch || flush();
@@ -626,19 +626,24 @@ void CellThinning::add(const pcl::PointXYZ& q) {
   if (++p.size == kBatch) place_pending();
 }
 
+void CellThinning::cells_of(std::size_t n, const float* x, const float* y, const float* z,
+                            std::uint64_t* keys, float* offsets2) const {
+  std::uint8_t wide[kBatch];
+  detail::cell_keys(n, x, y, z, inv_, keys, offsets2, wide);
+  for (std::size_t j = 0; j < n; ++j)
+    if (wide[j]) {
+      const pcl::PointXYZ q(x[j], y[j], z[j]);
+      keys[j] = cell_key(q, inv_);
+      offsets2[j] = centre_offset2(q);
+    }
+}
+
 void CellThinning::place_pending() {
   Pending& p = pending_;
   std::uint64_t keys[kBatch];
   float offsets2[kBatch];
-  std::uint8_t wide[kBatch];
-  detail::cell_keys(p.size, p.x, p.y, p.z, inv_, keys, offsets2, wide);
-  for (std::size_t j = 0; j < p.size; ++j) {
-    const pcl::PointXYZ& q = p.points[j];
-    if (wide[j])
-      place(q, cell_key(q, inv_), centre_offset2(q));
-    else
-      place(q, keys[j], offsets2[j]);
-  }
+  cells_of(p.size, p.x, p.y, p.z, keys, offsets2);
+  for (std::size_t j = 0; j < p.size; ++j) place(p.points[j], keys[j], offsets2[j]);
   p.size = 0;
 }
 
@@ -711,7 +716,6 @@ void CellThinning::release_after(Cloud& earlier) {
   Pending& b = pending_;
   std::uint64_t keys[kBatch];
   float offsets2[kBatch];
-  std::uint8_t wide[kBatch];
   for (std::size_t begin = 0; begin < earlier.size(); begin += kBatch) {
     const std::size_t n = std::min(kBatch, earlier.size() - begin);
     for (std::size_t j = 0; j < n; ++j) {
@@ -719,14 +723,14 @@ void CellThinning::release_after(Cloud& earlier) {
       const bool f = finite(p);  // (a non-finite point is skipped below)
       b.x[j] = f ? p.x : 0.0f, b.y[j] = f ? p.y : 0.0f, b.z[j] = f ? p.z : 0.0f;
     }
-    detail::cell_keys(n, b.x, b.y, b.z, inv_, keys, offsets2, wide);
+    cells_of(n, b.x, b.y, b.z, keys, offsets2);
     for (std::size_t j = 0; j < n; ++j) {
       pcl::PointXYZ& p = earlier[begin + j];
       if (!finite(p)) continue;
-      const std::uint32_t* slot = slot_.find(wide[j] ? cell_key(p, inv_) : keys[j]);
+      const std::uint32_t* slot = slot_.find(keys[j]);
       if (!slot) continue;
       taken[*slot] = 1;
-      if (offset2_[*slot] < (wide[j] ? centre_offset2(p) : offsets2[j])) p = kept[*slot];
+      if (offset2_[*slot] < offsets2[j]) p = kept[*slot];
     }
   }
   earlier.reserve(earlier.size() + std::size_t(std::count(taken.begin(), taken.end(), 0)));

@@ -131,6 +131,10 @@ class CellThinning {
   void empty();                                                          // as constructed
   void place(const pcl::PointXYZ& q, std::uint64_t key, float offset2);  // q of that cell
   void place_pending();  // the points added and not placed yet, in order
+  // The cells' keys (cell_key's) and squared offsets (centre_offset2's) of n <= 256 finite
+  // points given by their coordinates, worked out lanes at a time (src/cell_lanes.h).
+  void cells_of(std::size_t n, const float* x, const float* y, const float* z, std::uint64_t* keys,
+                float* offsets2) const;
   double inv_;
   PackedKeyMap<std::uint32_t> slot_;  // cell → index of its point in kept_
   RecentKeys<std::uint32_t> recent_;  // the cells of the last points, in front of slot_

@@ -51,8 +51,8 @@ void SemiOcTree::for_each_octant(F&& f) const {
 template <class F>
 void SemiOcTree::for_each_octant_below(const SemiOcTreeNode* node, unsigned depth,
                                        const octomap::OcTreeKey& key, F& f) const {
-  // A node without children is a leaf octant (below the coarse depth): its children are
-  // visited, else it is.
+  // A node's children are visited; a node without any is a leaf octant (if at or below
+  // the coarse depth).
   bool parent = false;
   for (unsigned i = 0; i < 8; ++i)
     if (nodeChildExists(node, i)) {
@@ -69,7 +69,7 @@ inline Octant SemiOcTree::make_octant(const octomap::OcTreeKey& key, unsigned le
   const unsigned mask = ~((1u << shift) - 1u);
   for (int i = 0; i < 3; ++i) o.key.k[i] = static_cast<octomap::key_type>(key.k[i] & mask);
   o.level = level;
-  o.size = resolution * double(1u << shift);
+  o.size = octant_size(level);
   const double half = 0.5 * o.size;
   o.center = Point3((double(o.key.k[0]) - double(kKeyOrigin)) * resolution + half,
                     (double(o.key.k[1]) - double(kKeyOrigin)) * resolution + half,
