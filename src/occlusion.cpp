@@ -829,13 +829,15 @@ Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, con
   return through_opening ? Visibility::kThroughOpening : Visibility::kDirect;
 }
 
-// The best visibility of p from `views`, and in `view` the first view giving it. Once a
-// view sees p through an opening, a later one can only do better by seeing it directly, so
-// its segment stops at the first opening it crosses (the result is the same).
+// The better of `floor` and the best visibility of p from `views`, and in `view` the first
+// view giving it if better than `floor` (else 0). Once p is known seen through an opening,
+// a view can only do better by seeing it directly, so its segment stops at the first
+// opening it crosses (the result is the same).
 template <bool kMarked>
 Visibility best_visibility(const SemiOcTree& tree, const std::vector<ViewLimits>& views,
-                           const Point3& p, std::size_t& segments, std::uint32_t& view) {
-  Visibility best = Visibility::kHidden;
+                           const Point3& p, std::size_t& segments, std::uint32_t& view,
+                           Visibility floor = Visibility::kHidden) {
+  Visibility best = floor;
   view = 0;
   for (std::size_t i = 0; i < views.size(); ++i) {
     ++segments;
@@ -1128,6 +1130,10 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
   std::vector<LatticePoint> points;      // by sample id
   std::vector<std::uint8_t> visibility;  // by sample id
   std::vector<std::uint32_t> best_view;  // by sample id: the first view giving it
+  // By sample id: the least visibility the labels of the candidates holding it already
+  // know (each takes the better of its own and the sample's, so the sample's visibility
+  // need only be found above it); a later candidate that knows less casts it again.
+  std::vector<std::uint8_t> known_floor;
   const OctantProof proof(tree, limits);
   std::vector<std::uint32_t> samples;  // ids of each candidate's samples, 9 per candidate
   std::vector<std::size_t> segments;
@@ -1137,6 +1143,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
     for (std::size_t c = 0; c < todo.size(); ++c) {
       LatticePoint s[9];
       const int n = samples_of(todo[c], leaf, s);
+      const auto known = std::uint8_t(known_visibility(todo[c].node->label(), params.scope));
       if (c + 8 < todo.size() && todo[c + 8].level < leaf) {  // hide the probes' cache misses
         LatticePoint ahead[9];
         for (int i = 0, m = samples_of(todo[c + 8], leaf, ahead); i < m; ++i)
@@ -1145,13 +1152,23 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
       if (n == 1) {  // a leaf's centre (odd lattice point) is no other octant's sample
         samples[9 * c] = static_cast<std::uint32_t>(points.size());
         points.push_back(s[0]);
+        known_floor.push_back(known);
         continue;
       }
       for (int i = 0; i < n; ++i) {
         const auto next = static_cast<std::uint32_t>(points.size());
-        const std::uint32_t id = *index.try_emplace(s[i], next).first;
-        if (id == next) points.push_back(s[i]);
-        samples[9 * c + i] = id;
+        std::uint32_t* id = index.try_emplace(s[i], next).first;
+        if (*id != next && known < known_floor[*id]) {
+          if (*id >= first_new)
+            known_floor[*id] = known;  // not cast yet
+          else
+            *id = next;  // cast above what this candidate knows: cast it again
+        }
+        if (*id == next) {
+          points.push_back(s[i]);
+          known_floor.push_back(known);
+        }
+        samples[9 * c + i] = *id;
       }
     }
     visibility.resize(points.size());
@@ -1159,8 +1176,9 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
     segments.assign(points.size() - first_new, 0);
     detail::parallel_for(points.size() - first_new, threads, 64, [&](std::size_t i, unsigned) {
       const std::size_t id = first_new + i;
-      visibility[id] = std::uint8_t(best_visibility<true>(
-          tree, limits, unpack(points[id], leaf_size), segments[i], best_view[id]));
+      visibility[id] = std::uint8_t(
+          best_visibility<true>(tree, limits, unpack(points[id], leaf_size), segments[i],
+                                best_view[id], Visibility(known_floor[id])));
     });
     for (std::size_t n : segments) report.segments += n;
 
