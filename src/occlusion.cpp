@@ -431,6 +431,8 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
                                 unsigned threads, int expected_depth_bins_per_degree) {
   depth_per_degree_ = 0;
   depth_cm_.clear();
+  depth_runs_.clear();
+  first_depth_run_.clear();
   const unsigned workers = detail::thread_count(threads);
   const std::size_t chunk = 1 << 16, chunks = (scan.size() + chunk - 1) / chunk;
   // f(batch, n) for the returns of chunk c, in the map frame, a batch of n at a time, their
@@ -549,6 +551,46 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
     depth_cm_[b] = std::uint16_t(std::clamp(std::ceil(100.0 * depth), 1.0, 65535.0));
   }
   depth_per_degree_ = k;
+  first_depth_run_.resize(std::size_t(bins.rows));
+  depth_runs_.clear();
+  for (int r = 0; r < bins.rows; ++r) {
+    first_depth_run_[std::size_t(r)] = static_cast<std::uint32_t>(depth_runs_.size());
+    for (int c = 0; c < bins.count[r]; c += kDepthRun) {
+      DepthSummary run;
+      for (int i = c, end = std::min(bins.count[r], c + kDepthRun); i < end; ++i)
+        run.add(depth_cm_[std::size_t(bins.first[r] + i)]);
+      depth_runs_.push_back(run);
+    }
+  }
+}
+
+void ReturnDirections::DepthSummary::add(std::uint16_t cm) {
+  if (cm == 0 || cm == 65535) {  // (as beyond_depth: none)
+    some_missing = true;
+    return;
+  }
+  least = std::min(least, cm);
+  greatest = std::max(greatest, cm);
+}
+
+void ReturnDirections::DepthSummary::add(const DepthSummary& o) {
+  least = std::min(least, o.least);
+  greatest = std::max(greatest, o.greatest);
+  some_missing |= o.some_missing;
+}
+
+void ReturnDirections::summarize_depths(int r, int c0, int c1, DepthSummary& s) const {
+  const std::uint16_t* row =
+      &depth_cm_[std::size_t(direction_bins(depth_per_degree_).first[std::size_t(r)])];
+  const DepthSummary* runs = &depth_runs_[first_depth_run_[std::size_t(r)]];
+  for (int c = c0; c <= c1;) {
+    if (c % kDepthRun == 0 && c + kDepthRun - 1 <= c1) {
+      s.add(runs[c / kDepthRun]);
+      c += kDepthRun;
+    } else {
+      s.add(row[c++]);
+    }
+  }
 }
 
 ReturnDirections::BoxSight ReturnDirections::may_see_box(const Eigen::Vector3d& lo,
@@ -571,15 +613,20 @@ ReturnDirections::BoxSight ReturnDirections::may_see_box(const Eigen::Vector3d& 
   // where that proves neither, each bin against the distances of the box's points in
   // its own directions (BinDistance): a box before a wall seen obliquely, or behind one,
   // spans bins whose depths differ by more than the box is deep.
+  // (beyond_depth grows with the depth: the least depth decides whether every bin's is
+  // beyond the farthest point, the greatest whether the nearest is beyond every one.)
   const DirectionBins& b = direction_bins(depth_per_degree_);
-  const double near2 = d.nearest * d.nearest, far2 = d.farthest * d.farthest;
-  bool all_before = true, all_behind = true;
-  for_each_bin_of(b, d, [&](int bin) {
-    const std::uint16_t cm = depth_cm_[std::size_t(bin)];
-    all_before &= !beyond_depth(cm, far2, tolerance);
-    all_behind &= beyond_depth(cm, near2, tolerance);
-    return all_before || all_behind;
+  DepthSummary depths;
+  for_each_row_of(b, d, [&](int r, int i0, int i1) {
+    const int n = b.count[std::size_t(r)];
+    summarize_depths(r, i0, std::min(i1, n - 1), depths);
+    if (i1 >= n) summarize_depths(r, 0, i1 - n, depths);  // across −180°
+    return true;
   });
+  bool all_before =
+      depths.greatest == 0 || !beyond_depth(depths.least, d.farthest * d.farthest, tolerance);
+  bool all_behind =
+      !depths.some_missing && beyond_depth(depths.greatest, d.nearest * d.nearest, tolerance);
   if (all_before || all_behind) return {all_before, all_behind};
   all_before = all_behind = true;
   for_each_row_of(b, d, [&](int r, int i0, int i1) {

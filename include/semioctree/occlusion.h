@@ -115,7 +115,21 @@ class ReturnDirections {
  private:
   std::vector<std::uint8_t> bins_;
   int depth_per_degree_ = 0;
-  std::vector<std::uint16_t> depth_cm_;    // per depth bin, rounded up; 0: none
+  std::vector<std::uint16_t> depth_cm_;  // per depth bin, rounded up; 0: none
+  // Per row of the depth bins, runs of kDepthRun columns (from the row's first): the least
+  // and the greatest of their depths and whether one has none (0 or the largest value),
+  // so that may_see_box reads a long run of a row a summary at a time.
+  static constexpr int kDepthRun = 16;
+  struct DepthSummary {
+    std::uint16_t least = 65535, greatest = 0;  // among the depths recorded (none: these)
+    bool some_missing = false;
+    void add(std::uint16_t cm);
+    void add(const DepthSummary& o);
+  };
+  std::vector<DepthSummary> depth_runs_;
+  std::vector<std::uint32_t> first_depth_run_;  // per row of the depth bins
+  // The summary of the depths of columns c0 ≤ c ≤ c1 of row r (c1 < the row's count).
+  void summarize_depths(int r, int c0, int c1, DepthSummary& s) const;
   std::vector<std::uint16_t> nearest_cm_;  // per bin, the nearest return, rounded down; 0: none
 };
 
