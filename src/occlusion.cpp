@@ -689,6 +689,32 @@ bool ReturnDirections::may_see(double dx, double dy, double dz, double tolerance
                        a.length * a.length, tolerance);
 }
 
+void ReturnDirections::may_see_each(std::size_t n, const double* dx, const double* dy,
+                                    const double* dz, double tolerance, std::uint8_t* out) const {
+  constexpr std::size_t kSize = DirectionBins::AngleBatch::kSize;
+  const DirectionBins& degree = direction_bins();
+  const DirectionBins* depth = depth_cm_.empty() ? nullptr : &direction_bins(depth_per_degree_);
+  DirectionBins::AngleBatch batch;
+  int bins[kSize], depth_bins[kSize];
+  for (std::size_t start = 0; start < n; start += kSize) {
+    const std::size_t m = std::min(kSize, n - start);
+    std::copy_n(dx + start, m, batch.x);
+    std::copy_n(dy + start, m, batch.y);
+    std::copy_n(dz + start, m, batch.z);
+    batch.compute(m);
+    degree.bins_of(batch, m, bins);
+    if (depth) depth->bins_of(batch, m, depth_bins);
+    for (std::size_t j = 0; j < m; ++j) {
+      bool may = true;  // (no angles: the optical centre itself)
+      if (batch.valid(j))
+        may = bins_[std::size_t(bins[j])] &&
+              (!depth || !beyond_depth(depth_cm_[std::size_t(depth_bins[j])],
+                                       batch.length[j] * batch.length[j], tolerance));
+      out[start + j] = may;
+    }
+  }
+}
+
 std::size_t ReturnDirections::bins_with_returns() const {
   return std::size_t(std::count(bins_.begin(), bins_.end(), std::uint8_t(1)));
 }
@@ -847,13 +873,15 @@ constexpr double kEndTolerance = 1e-9;
 // without blockers can be crossed in one step. `direct_or_not`: only whether p is seen
 // directly matters; a segment that crosses an opening then ends there, as kThroughOpening
 // whatever lies beyond (it can no longer be direct).
+// `returns_asked`: the caller found that the view's returns may see p.
 template <bool kMarked>
 Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, const Point3& p,
-                              bool direct_or_not = false) {
+                              bool direct_or_not = false, bool returns_asked = false) {
   const Point3& o = lim.view->position;
   const double dx = p.x - o.x, dy = p.y - o.y, dz = p.z - o.z;
   if (!lim.range_and_elevation.in_view(o, p)) return Visibility::kHidden;
-  if (lim.view->returns && !lim.view->returns->may_see(dx, dy, dz, tree.leaf_size()))
+  if (!returns_asked && lim.view->returns &&
+      !lim.view->returns->may_see(dx, dy, dz, tree.leaf_size()))
     return Visibility::kHidden;
   bool through_opening = false, blocked = false;
   auto visit = [&](const RayStep& s) {
@@ -879,17 +907,21 @@ Visibility segment_visibility(const SemiOcTree& tree, const ViewLimits& lim, con
 // The better of `floor` and the best visibility of p from `views`, and in `view` the first
 // view giving it if better than `floor` (else 0). Once p is known seen through an opening,
 // a view can only do better by seeing it directly, so its segment stops at the first
-// opening it crosses (the result is the same).
+// opening it crosses (the result is the same). `may_see`: bit i (i < 64) clear when view
+// i's returns cannot see p, set when they may (ReturnDirections::may_see_each); null: ask.
 template <bool kMarked>
 Visibility best_visibility(const SemiOcTree& tree, const std::vector<ViewLimits>& views,
                            const Point3& p, std::size_t& segments, std::uint32_t& view,
-                           Visibility floor = Visibility::kHidden) {
+                           Visibility floor = Visibility::kHidden,
+                           const std::uint64_t* may_see = nullptr) {
   Visibility best = floor;
   view = 0;
   for (std::size_t i = 0; i < views.size(); ++i) {
     ++segments;
+    const bool asked = may_see && i < 64;
+    if (asked && !((*may_see >> i) & 1u)) continue;  // hidden
     const Visibility v =
-        segment_visibility<kMarked>(tree, views[i], p, best == Visibility::kThroughOpening);
+        segment_visibility<kMarked>(tree, views[i], p, best == Visibility::kThroughOpening, asked);
     if (v > best) {
       best = v;
       view = std::uint32_t(i);
@@ -1221,11 +1253,36 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
     visibility.resize(points.size());
     best_view.resize(points.size());
     segments.assign(points.size() - first_new, 0);
-    detail::parallel_for(points.size() - first_new, threads, 64, [&](std::size_t i, unsigned) {
-      const std::size_t id = first_new + i;
-      visibility[id] = std::uint8_t(
-          best_visibility<true>(tree, limits, unpack(points[id], leaf_size), segments[i],
-                                best_view[id], Visibility(known_floor[id])));
+    // A batch of samples at a time: first whether each view's returns may see each of them
+    // (lanes at a time), then their segments.
+    constexpr std::size_t kBatch = 256;
+    const std::size_t batches = (points.size() - first_new + kBatch - 1) / kBatch;
+    detail::parallel_for(batches, threads, 1, [&](std::size_t b, unsigned) {
+      const std::size_t begin = first_new + b * kBatch;
+      const std::size_t n = std::min(kBatch, points.size() - begin);
+      Point3 p[kBatch];
+      std::uint64_t may_see[kBatch];
+      for (std::size_t i = 0; i < n; ++i) {
+        p[i] = unpack(points[begin + i], leaf_size);
+        may_see[i] = ~std::uint64_t(0);
+      }
+      double dx[kBatch], dy[kBatch], dz[kBatch];
+      std::uint8_t may[kBatch];
+      for (std::size_t v = 0; v < std::min<std::size_t>(views.size(), 64); ++v) {
+        if (!views[v].returns) continue;
+        const Point3& o = views[v].position;
+        for (std::size_t i = 0; i < n; ++i)
+          dx[i] = p[i].x - o.x, dy[i] = p[i].y - o.y, dz[i] = p[i].z - o.z;
+        views[v].returns->may_see_each(n, dx, dy, dz, leaf_size, may);
+        for (std::size_t i = 0; i < n; ++i)
+          if (!may[i]) may_see[i] &= ~(std::uint64_t(1) << v);
+      }
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t id = begin + i;
+        visibility[id] = std::uint8_t(
+            best_visibility<true>(tree, limits, p[i], segments[id - first_new], best_view[id],
+                                  Visibility(known_floor[id]), &may_see[i]));
+      }
     });
     for (std::size_t n : segments) report.segments += n;
 

@@ -715,6 +715,8 @@ TEST(Occlusion, MaySeeAnswersAsHasAndBehindSurface) {
              -180 + column * 360.0 /
                         std::max(1L, std::lround(360 * std::cos((elevation + 0.5) * M_PI / 180))),
              range(rng)));
+  points.emplace_back(0, 0, 0);  // the optical centre: may be seen
+  points.emplace_back(0, 0, -3);
   std::size_t differ = 0, seen = 0;
   for (const Eigen::Vector3d& p : points) {
     const bool expected =
@@ -726,6 +728,16 @@ TEST(Occlusion, MaySeeAnswersAsHasAndBehindSurface) {
   EXPECT_EQ(differ, 0u) << "of " << points.size() << " points";
   EXPECT_GT(seen, points.size() / 10);  // neither answer is always the same
   EXPECT_LT(seen, points.size() * 9 / 10);
+  // may_see_each, lanes at a time, answers as may_see one at a time.
+  std::vector<double> x, y, z;
+  for (const Eigen::Vector3d& p : points)
+    x.push_back(p.x()), y.push_back(p.y()), z.push_back(p.z());
+  std::vector<std::uint8_t> each(points.size(), 2);
+  r.may_see_each(points.size(), x.data(), y.data(), z.data(), 0.05, each.data());
+  differ = 0;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    differ += each[i] != std::uint8_t(r.may_see(x[i], y[i], z[i], 0.05));
+  EXPECT_EQ(differ, 0u) << "of " << points.size() << " points";
 }
 
 TEST(Occlusion, ReturnDirectionsOpenAboveTheHighestReturnOfEachAzimuth) {

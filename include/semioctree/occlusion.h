@@ -98,6 +98,10 @@ class ReturnDirections {
   // has(dx, dy, dz) and not behind_surface(dx, dy, dz, tolerance), in one look-up of the
   // direction (true for a zero vector: the optical centre itself).
   bool may_see(double dx, double dy, double dz, double tolerance) const;
+  // may_see for each of n vectors (out[i] = 1 or 0): the same answers, the angles and bins
+  // worked out lanes at a time.
+  void may_see_each(std::size_t n, const double* dx, const double* dy, const double* dz,
+                    double tolerance, std::uint8_t* out) const;
   // The depths' bins per degree (0: no depths recorded).
   int depth_bins_per_degree() const { return depth_per_degree_; }
 
