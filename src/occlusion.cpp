@@ -552,7 +552,6 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
   }
   depth_per_degree_ = k;
   first_depth_run_.resize(std::size_t(bins.rows));
-  depth_runs_.clear();
   for (int r = 0; r < bins.rows; ++r) {
     first_depth_run_[std::size_t(r)] = static_cast<std::uint32_t>(depth_runs_.size());
     for (int c = 0; c < bins.count[r]; c += kDepthRun) {
