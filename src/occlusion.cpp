@@ -684,8 +684,11 @@ bool ReturnDirections::may_see(double dx, double dy, double dz, double tolerance
   if (!DirectionBins::Angles::of(dx, dy, dz, a)) return true;
   if (!bins_[std::size_t(direction_bins().bin_of(a))]) return false;
   return depth_cm_.empty() ||
-         !beyond_depth(depth_cm_[std::size_t(direction_bins(depth_per_degree_).bin_of(a))],
-                       a.length * a.length, tolerance);
+         within_depth(direction_bins(depth_per_degree_).bin_of(a), a.length, tolerance);
+}
+
+bool ReturnDirections::within_depth(int depth_bin, double length, double tolerance) const {
+  return !beyond_depth(depth_cm_[std::size_t(depth_bin)], length * length, tolerance);
 }
 
 void ReturnDirections::may_see_each(std::size_t n, const double* dx, const double* dy,
@@ -707,8 +710,7 @@ void ReturnDirections::may_see_each(std::size_t n, const double* dx, const doubl
       bool may = true;  // (no angles: the optical centre itself)
       if (batch.valid(j))
         may = bins_[std::size_t(bins[j])] &&
-              (!depth || !beyond_depth(depth_cm_[std::size_t(depth_bins[j])],
-                                       batch.length[j] * batch.length[j], tolerance));
+              (!depth || within_depth(depth_bins[j], batch.length[j], tolerance));
       out[start + j] = may;
     }
   }

@@ -134,6 +134,9 @@ class ReturnDirections {
   std::vector<std::uint32_t> first_depth_run_;  // per row of the depth bins
   // The summary of the depths of columns c0 ≤ c ≤ c1 of row r (c1 < the row's count).
   void summarize_depths(int r, int c0, int c1, DepthSummary& s) const;
+  // may_see's depth test: a point at `length` in depth bin `depth_bin` (depths recorded)
+  // lies no more than `tolerance` beyond its depth.
+  bool within_depth(int depth_bin, double length, double tolerance) const;
   std::vector<std::uint16_t> nearest_cm_;  // per bin, the nearest return, rounded down; 0: none
 };
 
