@@ -213,21 +213,39 @@ Eigen::Vector3d refine_normal(const Cloud& cloud, const HorizontalPlane& plane, 
 }
 
 // What fitting a peak near `guess` starts from: the heights near it (within `near`), in
-// their order, and their histogram over the search window. Fed one height at a time, so
-// that one pass over a scan's heights serves the floor's and the ceiling's.
+// their order, and their histogram over the search window. Fed a batch of heights at a
+// time, so that one pass over a scan's heights serves the floor's and the ceiling's.
 struct PeakStart {
+  static constexpr std::size_t kBatch = 1024;
   PeakStart(double guess, const PreprocessParams& p)
       : guess(guess),
         lo(guess - p.peak_window),
         near(3 * p.peak_window),
         bin(p.histogram_bin),
         hist(std::size_t(std::max(1, int(std::ceil(2 * p.peak_window / p.histogram_bin)))), 0) {}
-  void add(float v) {
-    if (!(std::fabs(double(v) - guess) <= near)) return;
-    z.push_back(v);
-    const int b = int(std::floor((v - lo) / bin));
-    if (b >= 0 && b < int(hist.size())) ++hist[std::size_t(b)];
+  // Room for the heights near the guess among `count` like those of `sample`: a scan's
+  // floor and the walls around it give millions, which growing by doubling copies again.
+  void reserve_like(const std::vector<float>& sample, std::size_t count) {
+    std::size_t n = 0;
+    for (const float v : sample) n += is_near(v);
+    z.reserve(std::size_t(1.1 * double(n) / double(std::max<std::size_t>(sample.size(), 1)) *
+                          double(count)));
   }
+  // Adds the heights v[0, n), n <= kBatch, in order.
+  void add(const float* v, std::size_t n) {
+    float near_v[kBatch];  // those near the guess, gathered without a branch on each
+    std::size_t m = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+      near_v[m] = v[j];
+      m += is_near(v[j]);
+    }
+    z.insert(z.end(), near_v, near_v + m);
+    for (std::size_t j = 0; j < m; ++j) {
+      const std::int64_t b = floor_to_int((near_v[j] - lo) / bin);
+      if (b >= 0 && b < std::int64_t(hist.size())) ++hist[std::size_t(b)];
+    }
+  }
+  bool is_near(float v) const { return std::fabs(double(v) - guess) <= near; }
   double guess, lo, near, bin;
   std::vector<std::size_t> hist;
   std::vector<float> z;
@@ -273,8 +291,12 @@ HeightPeak fit_peak(const PeakStart& start, const EachHeight& each_height,
     peak.sigma = std::sqrt(std::max(0.0, sum2 / double(n) - mean * mean));
     // A ±w window truncates the Gaussian; 3σ keeps 99.7 % of it.
     window = std::max(3.0 * peak.sigma, 2 * p.histogram_bin);
-    // The same centre and window: every pass after this one would be this one again.
-    if (peak.center == center_before && window == window_before) break;
+    // The same window and a centre that moved less than a thousandth of a bin: the passes
+    // after this one would move it by less still (the fit has settled).
+    constexpr double kSettled = 1e-3;
+    if (window == window_before &&
+        std::fabs(peak.center - center_before) < kSettled * p.histogram_bin)
+      break;
   }
   peak.sigma = std::max(peak.sigma, p.min_sigma);
   return peak;
@@ -885,9 +907,16 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     std::vector<PeakStart> starts{PeakStart(on_floor.z(), p)};
     if (r.ceiling_found)
       starts.emplace_back((T * Eigen::Vector3d(c.x(), c.y(), highest->height_at(c))).z(), p);
-    each_height([&](float v) {
-      for (PeakStart& start : starts) start.add(v);
-    });
+    std::vector<float> sample_heights;
+    sample_heights.reserve(work->size());
+    for (const pcl::PointXYZ& q : *work) sample_heights.push_back(pcl::transformPoint(q, rotate).z);
+    for (PeakStart& start : starts) start.reserve_like(sample_heights, input.size());
+    float heights[PeakStart::kBatch];
+    for (std::size_t begin = 0; begin < input.size(); begin += PeakStart::kBatch) {
+      const std::size_t n = std::min(PeakStart::kBatch, input.size() - begin);
+      for (std::size_t j = 0; j < n; ++j) heights[j] = levelled(begin + j).z;
+      for (PeakStart& start : starts) start.add(heights, n);
+    }
     r.floor = fit_peak(starts[0], each_height, p);
     r.floor.plane_inliers = lowest->inliers;
     if (r.ceiling_found) {

@@ -6,6 +6,7 @@
 #include <unordered_set>
 
 #include "nbv/label_roles.h"
+#include "scanner_limits.h"
 #include "semioctree/preprocess.h"
 #include "semioctree/timing.h"
 
@@ -15,8 +16,13 @@ Cloud::Ptr within_limits(const Cloud::Ptr& scan, const ScannerView& limits, std:
   // Coordinates are floats: a return on a limit itself (the synthetic
   // scanner's lowest beam row) must survive the rounding.
   constexpr double kRangeTolerance = 1e-4, kElevationTolerance = 1e-3;  // m, degrees
-  // The elevation limits as limits of z / range, the sine of the elevation (increasing
-  // with it): no inverse sine per return.
+  // The limits on the squared range, and the elevation limits as limits of z / range, the
+  // sine of the elevation (increasing with it), compared as squares: no square root or
+  // division per return.
+  const double range_min = limits.min_range - kRangeTolerance;
+  const double range_max = limits.max_range + kRangeTolerance;
+  const double range2_min = range_min > 0 ? range_min * range_min : 0.0;
+  const double range2_max = range_max * range_max;
   auto sine_of = [](double deg) { return std::sin(std::clamp(deg, -90.0, 90.0) * M_PI / 180.0); };
   const double sin_min = limits.elevation_min_deg - kElevationTolerance <= -90.0
                              ? -2.0
@@ -24,26 +30,27 @@ Cloud::Ptr within_limits(const Cloud::Ptr& scan, const ScannerView& limits, std:
   const double sin_max = limits.elevation_max_deg + kElevationTolerance >= 90.0
                              ? 2.0
                              : sine_of(limits.elevation_max_deg + kElevationTolerance);
+  // (A return with a coordinate not a number is kept: preprocessing skips it.)
   auto within = [&](const pcl::PointXYZ& p) {
     const double x = p.x, y = p.y, z = p.z;
-    const double range = std::sqrt(x * x + y * y + z * z);
-    if (range < limits.min_range - kRangeTolerance || range > limits.max_range + kRangeTolerance)
-      return false;
-    if (range > 0) {
-      const double sine = z / range;
-      if (sine < sin_min || sine > sin_max) return false;
-    }
-    return true;
+    const double range2 = x * x + y * y + z * z;
+    if (range2 < range2_min || range2 > range2_max) return false;
+    return !(range2 > 0) || (detail::ScannerLimits::at_least(z, sin_min, range2) &&
+                             detail::ScannerLimits::at_least(-z, -sin_max, range2));
   };
-  std::vector<std::uint8_t> keep(scan->size());
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < scan->size(); ++i) kept += keep[i] = within((*scan)[i]);
-  if (dropped) *dropped = scan->size() - kept;
-  if (kept == scan->size()) return scan;
+  // Most scans lose none: the scan itself, unless a return lies outside.
+  std::size_t first_out = 0;
+  while (first_out < scan->size() && within((*scan)[first_out])) ++first_out;
+  if (first_out == scan->size()) {
+    if (dropped) *dropped = 0;
+    return scan;
+  }
   Cloud::Ptr out(new Cloud);
-  out->reserve(kept);
-  for (std::size_t i = 0; i < scan->size(); ++i)
-    if (keep[i]) out->push_back((*scan)[i]);
+  out->reserve(scan->size() - 1);
+  out->insert(out->end(), scan->begin(), scan->begin() + std::ptrdiff_t(first_out));
+  for (std::size_t i = first_out + 1; i < scan->size(); ++i)
+    if (within((*scan)[i])) out->push_back((*scan)[i]);
+  if (dropped) *dropped = scan->size() - out->size();
   return out;
 }
 

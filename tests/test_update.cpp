@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <stdexcept>
 
@@ -285,6 +286,21 @@ TEST(Update, ReturnsOutsideTheScannerLimitsAreDropped) {
   EXPECT_EQ(dropped, 0u);
   v.elevation_min_deg = -41;  // a robot whose body reaches -41.4°
   EXPECT_EQ(within_limits(all, v)->size(), 3u);
+  // The upper limit as the lower: on it kept, above it dropped. A return with a coordinate
+  // not a number is kept (preprocessing skips it).
+  v.elevation_max_deg = 30;
+  const double s30 = std::sin(30 * M_PI / 180), c30 = std::cos(30 * M_PI / 180);
+  Cloud::Ptr up(new Cloud);
+  add(*up, 4 * c30, 0.0, 4 * s30);                              // on it
+  add(*up, 1.0, 0.0, 1.0);                                      // 45°: above
+  add(*up, std::numeric_limits<float>::quiet_NaN(), 0.0, 0.0);  // not a number
+  add(*up, 0.0, -5.0, -5.0 * std::tan(40 * M_PI / 180));        // -40°
+  const Cloud::Ptr up_kept = within_limits(up, v, &dropped);
+  EXPECT_EQ(dropped, 1u);
+  ASSERT_EQ(up_kept->size(), 3u);
+  EXPECT_FLOAT_EQ((*up_kept)[0].z, float(4 * s30));
+  EXPECT_TRUE(std::isnan((*up_kept)[1].x));
+  EXPECT_FLOAT_EQ((*up_kept)[2].y, -5.0f);
 }
 
 }  // namespace
