@@ -196,8 +196,10 @@ std::vector<HorizontalPlane> find_horizontal_planes(const Cloud& input, const Cl
 // Normal of the least-squares plane through the points within `distance` of
 // `plane` (oriented to +z).
 Eigen::Vector3d refine_normal(const Cloud& cloud, const HorizontalPlane& plane, double distance) {
-  // The inliers by index (a floor holds millions of a scan's points: not copied).
+  // The inliers by index (a floor holds millions of a scan's points: not copied), room
+  // made for about as many as RANSAC's sample estimated.
   pcl::Indices near;
+  near.reserve(std::min(cloud.size(), plane.inliers + plane.inliers / 8));
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const pcl::PointXYZ& q = cloud[i];
     if (std::fabs(plane.normal.dot(Eigen::Vector3d(q.x, q.y, q.z)) + plane.d) <= distance)
