@@ -15,6 +15,7 @@
 #include <set>
 #include <tuple>
 
+#include "plane_segmentation.h"
 #include "random_subset.h"
 #include "scanner_limits.h"
 
@@ -424,7 +425,7 @@ std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceili
   for (const auto& q : levelled)
     if (std::isfinite(q.x) && q.z >= 0 && q.z < ceiling_height) remaining->push_back(q);
 
-  pcl::SACSegmentation<pcl::PointXYZ> seg;
+  detail::PlaneSegmentation seg;  // PCL's, counting lanes at a time
   seg.setOptimizeCoefficients(false);  // refitted below on all inliers
   seg.setModelType(pcl::SACMODEL_PARALLEL_PLANE);
   seg.setMethodType(pcl::SAC_RANSAC);

@@ -20,6 +20,7 @@
 
 #include "cell_lanes.h"
 #include "parallel_for.h"
+#include "plane_segmentation.h"
 #include "random_subset.h"
 #include "semioctree/octomap_ext/packed_key_map.h"
 
@@ -104,7 +105,7 @@ std::vector<HorizontalPlane> find_horizontal_planes(const Cloud& input, const Cl
       among == FirstPlaneAmong::kReturns ? work : area_uniform_subset(input, p);
   if (work->empty() || search->empty()) return {};
   const double scale = double(input.size()) / double(work->size());
-  pcl::SACSegmentation<pcl::PointXYZ> seg;  // deterministic seed by default
+  detail::PlaneSegmentation seg;  // PCL's, counting lanes at a time; a fixed seed
   seg.setOptimizeCoefficients(true);
   seg.setModelType(pcl::SACMODEL_PERPENDICULAR_PLANE);
   seg.setMethodType(pcl::SAC_RANSAC);

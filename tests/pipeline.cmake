@@ -25,6 +25,9 @@ endif()
 if(TARGET semioctree_sim)
   semioctree_add_bench(bench_occlusion SOURCES bench_occlusion.cpp LIBS semioctree_sim_platform)
 endif()
+# RANSAC's plane segmentation with laned inlier counts (src/plane_segmentation.h).
+semioctree_add_test(test_plane_segmentation SOURCES test_plane_segmentation.cpp LIBS semioctree)
+target_include_directories(test_plane_segmentation PRIVATE ${PROJECT_SOURCE_DIR})
 # The dense-array homogeneous grid, a baseline of the benchmarks (support/dense_grid.h; it
 # shares the worker pool and the scanner's limits of src/).
 semioctree_add_test(test_dense_grid SOURCES test_dense_grid.cpp LIBS semioctree)
