@@ -515,14 +515,20 @@ std::size_t count_cells_of(std::size_t size, const EachPoint& each_point, double
       std::max<std::size_t>(1, std::min<std::size_t>(threads, size / kMinThreadShare));
   const std::size_t split = workers == 1 ? 2 : 1;  // tables a worker
   if (bounds && !bounds->empty()) {
-    const std::size_t budget = table_bytes(cap, workers * split) / workers;
-    std::vector<CellBits> sets;
-    for (std::size_t w = 0; w < workers; ++w) sets.emplace_back(*bounds, inv, budget);
-    if (sets[0].valid()) {
-      std::vector<std::uint8_t> fits(workers, 1);
-      detail::parallel_for(workers, unsigned(workers), 1, [&](std::size_t w, unsigned) {
+    // The tables' memory, a share a worker; or all of it for one set, on one thread, where
+    // a share cannot hold the index of the bounds (a scan that sees far through a window):
+    // one pass beats the tables' passes by parts.
+    const std::size_t budget = table_bytes(cap, workers * split);
+    for (int attempt = 0; attempt < (workers > 1 ? 2 : 1); ++attempt) {
+      const std::size_t set_count = attempt == 0 ? workers : 1;
+      std::vector<CellBits> sets;
+      for (std::size_t w = 0; w < set_count; ++w)
+        sets.emplace_back(*bounds, inv, budget / set_count);
+      if (!sets[0].valid()) continue;
+      std::vector<std::uint8_t> fits(set_count, 1);
+      detail::parallel_for(set_count, unsigned(set_count), 1, [&](std::size_t w, unsigned) {
         CellBits& set = sets[w];
-        each_point(size * w / workers, size * (w + 1) / workers,
+        each_point(size * w / set_count, size * (w + 1) / set_count,
                    [&](std::size_t, const pcl::PointXYZ& q) {
                      if (!finite(q) || set.add(q)) return true;
                      fits[w] = 0;

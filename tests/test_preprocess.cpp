@@ -148,7 +148,8 @@ TEST(Preprocess, CountsCellsExactlyWithTablesOfBoundedSize) {
   ASSERT_GT(room->size(), 100000u);
   for (double spacing : {0.01, 0.03, 0.2}) {
     const std::size_t truth = distinct_cells(*room, spacing);
-    // Room for all of them (counted in CellBits blocks within the tables' memory); tables
+    // Room for all of them (counted in CellBits blocks within the tables' memory: a set a
+    // worker, or one set on one thread where a worker's share cannot hold one); tables
     // of 7/10 of the count (on 2 or 3 threads each
     // share's table holds its cells, and their union overflows while they merge); and
     // tables of a tenth (counted in about 13 parts, shared by the workers) and, on one
