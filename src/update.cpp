@@ -45,12 +45,14 @@ Cloud::Ptr within_limits(const Cloud::Ptr& scan, const ScannerView& limits, std:
     if (dropped) *dropped = 0;
     return scan;
   }
+  std::size_t kept = first_out;
+  for (std::size_t i = first_out + 1; i < scan->size(); ++i) kept += within((*scan)[i]);
+  if (dropped) *dropped = scan->size() - kept;
   Cloud::Ptr out(new Cloud);
-  out->reserve(scan->size() - 1);
+  out->reserve(kept);
   out->insert(out->end(), scan->begin(), scan->begin() + std::ptrdiff_t(first_out));
   for (std::size_t i = first_out + 1; i < scan->size(); ++i)
     if (within((*scan)[i])) out->push_back((*scan)[i]);
-  if (dropped) *dropped = scan->size() - out->size();
   return out;
 }
 
