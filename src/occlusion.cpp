@@ -582,14 +582,28 @@ void ReturnDirections::summarize_depths(int r, int c0, int c1, DepthSummary& s) 
   const std::uint16_t* row =
       &depth_cm_[std::size_t(direction_bins(depth_per_degree_).first[std::size_t(r)])];
   const DepthSummary* runs = &depth_runs_[first_depth_run_[std::size_t(r)]];
-  for (int c = c0; c <= c1;) {
-    if (c % kDepthRun == 0 && c + kDepthRun - 1 <= c1) {
-      s.add(runs[c / kDepthRun]);
-      c += kDepthRun;
-    } else {
-      s.add(row[c++]);
+  // The columns before the first whole run and after the last, bin by bin (without a
+  // branch on each); the whole runs between, a summary at a time.
+  const auto bins = [&](int from, int to) {  // columns [from, to)
+    std::uint16_t least = s.least, greatest = s.greatest;
+    bool missing = false;
+    for (int c = from; c < to; ++c) {
+      const std::uint16_t cm = row[c];
+      const bool none = cm == 0 || cm == 65535;  // (as beyond_depth)
+      missing |= none;
+      least = std::min(least, none ? std::uint16_t(65535) : cm);
+      greatest = std::max(greatest, none ? std::uint16_t(0) : cm);
     }
+    s.least = least, s.greatest = greatest, s.some_missing |= missing;
+  };
+  int run = (c0 + kDepthRun - 1) / kDepthRun;  // the first run starting at or after c0
+  if ((run + 1) * kDepthRun - 1 > c1) {        // no whole run
+    bins(c0, c1 + 1);
+    return;
   }
+  bins(c0, run * kDepthRun);
+  for (; (run + 1) * kDepthRun - 1 <= c1; ++run) s.add(runs[run]);
+  bins(run * kDepthRun, c1 + 1);
 }
 
 ReturnDirections::BoxSight ReturnDirections::may_see_box(const Eigen::Vector3d& lo,
