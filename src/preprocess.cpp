@@ -1064,14 +1064,15 @@ PreprocessResult preprocess(const Cloud& input, const PreprocessParams& p) {
     const std::size_t shares =
         std::max<std::size_t>(1, std::min<std::size_t>(threads, input.size() / kMinThreadShare));
     // The cells the search counted at this spacing (if it did): each share's table sized
-    // for its part of them at once, not grown by doubling.
+    // for its part of them at once, not grown by doubling; the first's for all of them, as
+    // the later shares' points are added to it.
     std::size_t cells = 0;
     for (const auto& [s, n] : r.spacing_counts)
       if (s == spacing) cells = n;
     std::vector<CellThinning> thinned;
     for (std::size_t k = 0; k < shares; ++k) {
       thinned.emplace_back(spacing);
-      thinned.back().reserve(cells / shares);
+      thinned.back().reserve(k == 0 ? cells : cells / shares);
     }
     detail::parallel_for(shares, unsigned(shares), 1, [&](std::size_t k, unsigned) {
       each_cut_in(input.size() * k / shares, input.size() * (k + 1) / shares,
