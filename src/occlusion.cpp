@@ -563,21 +563,6 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
   }
 }
 
-void ReturnDirections::DepthSummary::add(std::uint16_t cm) {
-  if (cm == 0 || cm == 65535) {  // (as beyond_depth: none)
-    some_missing = true;
-    return;
-  }
-  least = std::min(least, cm);
-  greatest = std::max(greatest, cm);
-}
-
-void ReturnDirections::DepthSummary::add(const DepthSummary& o) {
-  least = std::min(least, o.least);
-  greatest = std::max(greatest, o.greatest);
-  some_missing |= o.some_missing;
-}
-
 void ReturnDirections::summarize_depths(int r, int c0, int c1, DepthSummary& s) const {
   const std::uint16_t* row =
       &depth_cm_[std::size_t(direction_bins(depth_per_degree_).first[std::size_t(r)])];
@@ -585,16 +570,9 @@ void ReturnDirections::summarize_depths(int r, int c0, int c1, DepthSummary& s) 
   // The columns before the first whole run and after the last, bin by bin (without a
   // branch on each); the whole runs between, a summary at a time.
   const auto bins = [&](int from, int to) {  // columns [from, to)
-    std::uint16_t least = s.least, greatest = s.greatest;
-    bool missing = false;
-    for (int c = from; c < to; ++c) {
-      const std::uint16_t cm = row[c];
-      const bool none = cm == 0 || cm == 65535;  // (as beyond_depth)
-      missing |= none;
-      least = std::min(least, none ? std::uint16_t(65535) : cm);
-      greatest = std::max(greatest, none ? std::uint16_t(0) : cm);
-    }
-    s.least = least, s.greatest = greatest, s.some_missing |= missing;
+    DepthSummary part;                       // (a local the row's reads cannot alias)
+    for (int c = from; c < to; ++c) part.add(row[c]);
+    s.add(part);
   };
   int run = (c0 + kDepthRun - 1) / kDepthRun;  // the first run starting at or after c0
   if ((run + 1) * kDepthRun - 1 > c1) {        // no whole run

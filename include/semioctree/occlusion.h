@@ -8,6 +8,7 @@
 #include <octomap/OcTree.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -127,8 +128,17 @@ class ReturnDirections {
   struct DepthSummary {
     std::uint16_t least = 65535, greatest = 0;  // among the depths recorded (none: these)
     bool some_missing = false;
-    void add(std::uint16_t cm);
-    void add(const DepthSummary& o);
+    void add(std::uint16_t cm) {  // without a branch: rows are summarized in lane loops
+      const bool none = cm == 0 || cm == 65535;  // (as beyond_depth)
+      some_missing |= none;
+      least = std::min(least, none ? std::uint16_t(65535) : cm);
+      greatest = std::max(greatest, none ? std::uint16_t(0) : cm);
+    }
+    void add(const DepthSummary& o) {
+      least = std::min(least, o.least);
+      greatest = std::max(greatest, o.greatest);
+      some_missing |= o.some_missing;
+    }
   };
   std::vector<DepthSummary> depth_runs_;
   std::vector<std::uint32_t> first_depth_run_;  // per row of the depth bins
