@@ -432,6 +432,7 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
   depth_per_degree_ = 0;
   depth_cm_.clear();
   depth_runs_.clear();
+  degree_depths_.clear();
   first_depth_run_.clear();
   const unsigned workers = detail::thread_count(threads);
   const std::size_t chunk = 1 << 16, chunks = (scan.size() + chunk - 1) / chunk;
@@ -561,12 +562,48 @@ void ReturnDirections::add_scan(const Cloud& scan, const Eigen::Matrix3d& scanne
       depth_runs_.push_back(run);
     }
   }
+  summarize_degree_depths();
 }
 
-void ReturnDirections::summarize_depths(int r, int c0, int c1, DepthSummary& s) const {
-  const std::uint16_t* row =
-      &depth_cm_[std::size_t(direction_bins(depth_per_degree_).first[std::size_t(r)])];
-  const DepthSummary* runs = &depth_runs_[first_depth_run_[std::size_t(r)]];
+void ReturnDirections::summarize_degree_depths() {
+  // A direction of 1° row R lies at an elevation e in [R, R + 1) degrees, so in depth row
+  // ⌊e·k⌋, one of R·k … R·k + k − 1; of column c of n, its azimuth fraction f lies in
+  // [c / n, (c + 1) / n), so in depth column ⌊f·m⌋ of the depth row's m, one of
+  // ⌊c·m / n⌋ … ⌈(c + 1)·m / n⌉ − 1. One more row and column on each side cover the
+  // rounding at the edges.
+  const DirectionBins& degree = direction_bins(1);
+  const DirectionBins& fine = direction_bins(depth_per_degree_);
+  const int k = depth_per_degree_;
+  degree_depths_.assign(std::size_t(degree.total), DepthSummary{});
+  for (int big = 0; big < degree.rows; ++big) {
+    const std::int64_t n = degree.count[std::size_t(big)];
+    DepthSummary* out = &degree_depths_[std::size_t(degree.first[std::size_t(big)])];
+    for (int r = std::max(0, big * k - 1); r <= std::min(fine.rows - 1, big * k + k); ++r) {
+      const std::int64_t m = fine.count[std::size_t(r)];
+      const std::uint16_t* row = &depth_cm_[std::size_t(fine.first[std::size_t(r)])];
+      const auto at = [&](std::int64_t i) {  // −1 ≤ i ≤ m + 1
+        if (i < 0) i += m;
+        while (i >= m) i -= m;
+        return row[i];
+      };
+      // Column c: the depth columns [⌊c·m / n⌋, ⌊(c + 1)·m / n⌋) one after the other, then
+      // the one before, ⌊(c + 1)·m / n⌋ and, when (c + 1)·m / n is not whole, the next.
+      std::int64_t i = 0;
+      for (std::int64_t c = 0; c < n; ++c) {
+        const std::int64_t from = c * m / n, to = (c + 1) * m / n;
+        DepthSummary s;
+        for (; i < to; ++i) s.add(row[i]);
+        s.add(at(from - 1));
+        s.add(at(to));
+        if ((c + 1) * m % n != 0) s.add(at(to + 1));
+        out[c].add(s);
+      }
+    }
+  }
+}
+
+void ReturnDirections::summarize_depths(const std::uint16_t* row, const DepthSummary* runs, int c0,
+                                        int c1, DepthSummary& s) {
   // The columns before the first whole run and after the last, bin by bin (without a
   // branch on each); the whole runs between, a summary at a time.
   const auto bins = [&](int from, int to) {  // columns [from, to)
@@ -592,14 +629,22 @@ ReturnDirections::BoxSight ReturnDirections::may_see_box(const Eigen::Vector3d& 
   // Returns per 1° bin; depths per depth bin (a coarser reading of the depths would take
   // a surface seen obliquely for nearer than it is over much of a degree).
   bool all_have = true, none_has = true;
+  DepthSummary by_degree;  // a bound on the box's depths (see degree_depths_)
+  const bool depths_recorded = !depth_cm_.empty();
   for_each_bin_of(direction_bins(), d, [&](int bin) {
     const bool has = bins_[std::size_t(bin)] != 0;
     all_have &= has;
     none_has &= !has;
+    if (depths_recorded) by_degree.add(degree_depths_[std::size_t(bin)]);
     return all_have || none_has;
   });
   if (none_has) return {false, true};
-  if (!all_have || depth_cm_.empty()) return {all_have, false};
+  if (!all_have || !depths_recorded) return {all_have, false};
+  // (At most one of the two holds; what holds of the bound holds of the depths.)
+  if (by_degree.greatest == 0 || !beyond_depth(by_degree.least, d.farthest * d.farthest, tolerance))
+    return {true, false};
+  if (!by_degree.some_missing && beyond_depth(by_degree.greatest, d.nearest * d.nearest, tolerance))
+    return {false, true};
   // First each depth bin against the whole box's nearest and farthest points (cheap);
   // where that proves neither, each bin against the distances of the box's points in
   // its own directions (BinDistance): a box before a wall seen obliquely, or behind one,
@@ -610,8 +655,10 @@ ReturnDirections::BoxSight ReturnDirections::may_see_box(const Eigen::Vector3d& 
   DepthSummary depths;
   for_each_row_of(b, d, [&](int r, int i0, int i1) {
     const int n = b.count[std::size_t(r)];
-    summarize_depths(r, i0, std::min(i1, n - 1), depths);
-    if (i1 >= n) summarize_depths(r, 0, i1 - n, depths);  // across −180°
+    const std::uint16_t* row = &depth_cm_[std::size_t(b.first[std::size_t(r)])];
+    const DepthSummary* runs = &depth_runs_[first_depth_run_[std::size_t(r)]];
+    summarize_depths(row, runs, i0, std::min(i1, n - 1), depths);
+    if (i1 >= n) summarize_depths(row, runs, 0, i1 - n, depths);  // across −180°
     return true;
   });
   bool all_before =
@@ -620,6 +667,7 @@ ReturnDirections::BoxSight ReturnDirections::may_see_box(const Eigen::Vector3d& 
       !depths.some_missing && beyond_depth(depths.greatest, d.nearest * d.nearest, tolerance);
   if (all_before || all_behind) return {all_before, all_behind};
   all_before = all_behind = true;
+  const double farthest2 = d.farthest * d.farthest, nearest2 = d.nearest * d.nearest;
   for_each_row_of(b, d, [&](int r, int i0, int i1) {
     const double el0 = b.row_edge(r), el1 = b.row_edge(r + 1);
     const double c0 = std::cos(el0), c1 = std::cos(el1);
@@ -643,17 +691,22 @@ ReturnDirections::BoxSight ReturnDirections::may_see_box(const Eigen::Vector3d& 
         if (az_cos >= 0 && next_cos <= 0 && az_sin + next_sin > 0) sin_az.hi = 1;   // π/2
         if (az_cos <= 0 && next_cos >= 0 && az_sin + next_sin < 0) sin_az.lo = -1;  // −π/2
       }
-      BinDistance t;
-      t.axis(lo.x(), hi.x(), times(cos_el, cos_az));
-      t.axis(lo.y(), hi.y(), times(cos_el, sin_az));
-      t.axis(lo.z(), hi.z(), uz);
-      if (!t.empty) {
-        const std::uint16_t cm = depth_cm_[std::size_t(b.first[r] + i % n)];
-        const double before = std::min(t.exit, d.farthest);
-        const double behind = std::max(t.entry, d.nearest);
-        all_before &= !beyond_depth(cm, before * before, tolerance);
-        all_behind &= beyond_depth(cm, behind * behind, tolerance);
-        if (!(all_before || all_behind)) return false;
+      // The whole box's bounds first: only a bin they leave undecided needs its own.
+      const std::uint16_t cm = depth_cm_[std::size_t(b.first[r] + i % n)];
+      const bool check_before = all_before && beyond_depth(cm, farthest2, tolerance);
+      const bool check_behind = all_behind && !beyond_depth(cm, nearest2, tolerance);
+      if (check_before || check_behind) {
+        BinDistance t;
+        t.axis(lo.x(), hi.x(), times(cos_el, cos_az));
+        t.axis(lo.y(), hi.y(), times(cos_el, sin_az));
+        t.axis(lo.z(), hi.z(), uz);
+        if (!t.empty) {
+          const double before = std::min(t.exit, d.farthest);
+          const double behind = std::max(t.entry, d.nearest);
+          if (check_before) all_before = !beyond_depth(cm, before * before, tolerance);
+          if (check_behind) all_behind = beyond_depth(cm, behind * behind, tolerance);
+          if (!(all_before || all_behind)) return false;
+        }
       }
       az_cos = next_cos;
       az_sin = next_sin;
@@ -988,10 +1041,18 @@ Point3 unpack(LatticePoint p, double leaf) {
   return {coord(0), coord(1), coord(2)};
 }
 
-// The centre (index 0) and the 8 corners of an octant; a leaf has only its centre.
-int samples_of(const Candidate& c, unsigned leaf_level, LatticePoint out[9]) {
+// The centre (index 0) and the 8 corners of an octant; a leaf has only its centre. With
+// `leaf_centres`, an octant of 2 × 2 × 2 leaves has its leaves' centres instead, in the
+// order of its children (exact octants: what its leaves judged alone say, without a proof).
+// Only corners (9 samples) are shared with other octants.
+int samples_of(const Candidate& c, unsigned leaf_level, bool leaf_centres, LatticePoint out[9]) {
   const std::uint32_t size = 1u << (leaf_level - c.level);  // in leaves
   const std::uint32_t x = 2u * c.key.k[0], y = 2u * c.key.k[1], z = 2u * c.key.k[2];
+  if (leaf_centres && c.level + 1 == leaf_level) {
+    for (int k = 0; k < 8; ++k)  // child index: bit 0 x, bit 1 y, bit 2 z (OctoMap's)
+      out[k] = pack_cell_parts(x + ((k & 1) ? 3 : 1), y + ((k & 2) ? 3 : 1), z + ((k & 4) ? 3 : 1));
+    return 8;
+  }
   out[0] = pack_cell_parts(x + size, y + size, z + size);
   if (c.level == leaf_level) return 1;
   for (int k = 0; k < 8; ++k)
@@ -1214,17 +1275,19 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
     samples.resize(9 * todo.size());
     for (std::size_t c = 0; c < todo.size(); ++c) {
       LatticePoint s[9];
-      const int n = samples_of(todo[c], leaf, s);
+      const int n = samples_of(todo[c], leaf, params.exact_octants, s);
       const auto known = std::uint8_t(known_visibility(todo[c].node->label(), params.scope));
-      if (c + 8 < todo.size() && todo[c + 8].level < leaf) {  // hide the probes' cache misses
+      if (c + 8 < todo.size()) {  // hide the probes' cache misses
         LatticePoint ahead[9];
-        for (int i = 0, m = samples_of(todo[c + 8], leaf, ahead); i < m; ++i)
-          index.prefetch(ahead[i]);
+        if (samples_of(todo[c + 8], leaf, params.exact_octants, ahead) == 9)
+          for (const LatticePoint& p : ahead) index.prefetch(p);
       }
-      if (n == 1) {  // a leaf's centre (odd lattice point) is no other octant's sample
-        samples[9 * c] = static_cast<std::uint32_t>(points.size());
-        points.push_back(s[0]);
-        known_floor.push_back(known);
+      if (n < 9) {  // leaves' centres (odd lattice points) are no other octant's samples
+        for (int i = 0; i < n; ++i) {
+          samples[9 * c + i] = static_cast<std::uint32_t>(points.size());
+          points.push_back(s[i]);
+          known_floor.push_back(known);
+        }
         continue;
       }
       for (int i = 0; i < n; ++i) {
@@ -1290,7 +1353,10 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
       const auto seen = [&](std::uint32_t sample) { return std::max(known, visibility[sample]); };
       const Label l = label_for(Visibility(seen(id[0])), params.scope);
       bool uniform = true;
-      if (o.level < leaf) {
+      if (params.exact_octants && o.level + 1 == leaf) {  // its leaves' centres
+        for (int i = 1; i < 8 && uniform; ++i)
+          uniform = label_for(Visibility(seen(id[i])), params.scope) == l;
+      } else if (o.level < leaf) {
         // Exact: the same visibility, not just the same label, then proven for all of it.
         for (int i = 1; i < 9 && uniform; ++i)
           uniform = params.exact_octants ? seen(id[i]) == seen(id[0])
@@ -1306,21 +1372,32 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
     for (std::size_t n : unproven) report.octants_unproven += n;
 
     std::vector<Candidate> children;
+    // A leaf of the tree (or a tested child) labelled in place.
+    const auto relabel = [&](SemiOcTreeNode* node, Label l) {
+      ++report.octants_tested;
+      node->set_label(l);
+      node->setLogOdds(tree.log_odds_for(l));
+      report.empty += l == Label::kEmpty;
+      report.occluded += l == Label::kOccluded;
+      report.out += l == Label::kOut;
+    };
     for (std::size_t c = 0; c < todo.size(); ++c) {
       const Candidate& o = todo[c];
-      ++report.octants_tested;
       if (decision[c] != kSplit) {
-        const auto l = Label(decision[c]);
-        // A leaf of the tree: relabel in place.
-        o.node->set_label(l);
-        o.node->setLogOdds(tree.log_odds_for(l));
-        report.empty += l == Label::kEmpty;
-        report.occluded += l == Label::kOccluded;
-        report.out += l == Label::kOut;
+        relabel(o.node, Label(decision[c]));
         continue;
       }
+      ++report.octants_tested;
       tree.expandNode(o.node);  // partly visible: 8 children with its label
       ++report.octants_split;
+      if (params.exact_octants && o.level + 1 == leaf) {  // its leaves were tested with it
+        const Visibility known = known_visibility(o.node->label(), params.scope);
+        for (unsigned k = 0; k < 8; ++k)
+          relabel(
+              tree.getNodeChild(o.node, k),
+              label_for(std::max(known, Visibility(visibility[samples[9 * c + k]])), params.scope));
+        continue;
+      }
       const unsigned half = 1u << (leaf - o.level - 1);
       for (unsigned k = 0; k < 8; ++k) {  // child index: bit 0 x, bit 1 y, bit 2 z (OctoMap's)
         octomap::OcTreeKey ck = o.key;

@@ -142,8 +142,15 @@ class ReturnDirections {
   };
   std::vector<DepthSummary> depth_runs_;
   std::vector<std::uint32_t> first_depth_run_;  // per row of the depth bins
-  // The summary of the depths of columns c0 ≤ c ≤ c1 of row r (c1 < the row's count).
-  void summarize_depths(int r, int c0, int c1, DepthSummary& s) const;
+  // Per 1° bin, the summary of the depth bins that may hold any of its directions (with a
+  // bin's margin around it), so that may_see_box first reads a box's depths a degree at a
+  // time: a bound on them, not their value.
+  std::vector<DepthSummary> degree_depths_;
+  void summarize_degree_depths();
+  // Adds to `s` the depths of columns c0 ≤ c ≤ c1 (c1 < the row's count) of a row of depth
+  // bins, given its depths and its runs' summaries.
+  static void summarize_depths(const std::uint16_t* row, const DepthSummary* runs, int c0, int c1,
+                               DepthSummary& s);
   // may_see's depth test: a point at `length` in depth bin `depth_bin` (depths recorded)
   // lies no more than `tolerance` beyond its depth.
   bool within_depth(int depth_bin, double length, double tolerance) const;
