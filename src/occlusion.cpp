@@ -1085,13 +1085,14 @@ class OctantProof {
   struct Box {
     Point3 lo, hi;
   };
-  Box box_of(const Candidate& c) const {
-    const double size = leaf_ * double(1u << (tree_.leaf_level() - c.level));
-    const Point3 lo((double(c.key.k[0]) - double(kKeyOrigin)) * leaf_,
-                    (double(c.key.k[1]) - double(kKeyOrigin)) * leaf_,
-                    (double(c.key.k[2]) - double(kKeyOrigin)) * leaf_);
+  Box key_box(const octomap::OcTreeKey& key, unsigned level) const {
+    const double size = leaf_ * double(1u << (tree_.leaf_level() - level));
+    const Point3 lo((double(key.k[0]) - double(kKeyOrigin)) * leaf_,
+                    (double(key.k[1]) - double(kKeyOrigin)) * leaf_,
+                    (double(key.k[2]) - double(kKeyOrigin)) * leaf_);
     return {lo, Point3(lo.x + size, lo.y + size, lo.z + size)};
   }
+  Box box_of(const Candidate& c) const { return key_box(c.key, c.level); }
   static std::pair<Eigen::Vector3d, Eigen::Vector3d> relative(const Box& b, const Point3& o) {
     return {{b.lo.x - o.x, b.lo.y - o.y, b.lo.z - o.z}, {b.hi.x - o.x, b.hi.y - o.y, b.hi.z - o.z}};
   }
@@ -1099,6 +1100,10 @@ class OctantProof {
     const double h = o.size / 2;
     return p.x >= o.center.x - h && p.x < o.center.x + h && p.y >= o.center.y - h &&
            p.y < o.center.y + h && p.z >= o.center.z - h && p.z < o.center.z + h;
+  }
+  static bool holds_point(const Box& b, const Point3& p) {
+    return p.x >= b.lo.x && p.x < b.hi.x && p.y >= b.lo.y && p.y < b.hi.y && p.z >= b.lo.z &&
+           p.z < b.hi.z;
   }
   // Whether a segment from the view that crosses the octant is seen no better than `v`.
   static bool caps_at(const ViewLimits& view, const Octant& o, Visibility v) {
@@ -1139,19 +1144,28 @@ class OctantProof {
       return true;
     if (sv.returns && sv.returns->may_see_box(lo, hi, leaf_).none) return true;
     // The layers: where the segment to the centre meets such octants, the last before
-    // the box (a wall behind furniture) and the first.
+    // the box (a wall behind furniture; walked back from the centre), then the first
+    // (walked from the view). Neither is the scanner's own octant.
     const Point3 centre(0.5 * (box.lo.x + box.hi.x), 0.5 * (box.lo.y + box.hi.y),
                         0.5 * (box.lo.z + box.hi.z));
+    const auto stops = [&](const RayStep& s) {
+      return !s.summary && s.t_enter > 0.0 && s.node &&
+             best_across(view, s.node->label(), s.key, s.level) <= v;
+    };
     std::optional<octomap::OcTreeKey> first, last;
-    tree_.traverse_marked(sv.position, centre, [&](const RayStep& s) {
-      if (s.summary || s.t_enter <= 0.0) return true;
-      if (!s.node || best_across(view, s.node->label(), s.key, s.level) > v) return true;
-      if (!first) first = s.key;
-      last = s.key;
-      return true;
+    tree_.traverse_marked(centre, sv.position, [&](const RayStep& s) {
+      if (!stops(s)) return true;
+      if (!holds_point(key_box(s.key, s.level), sv.position)) last = s.key;
+      return false;
     });
-    return first && (behind_layer(view, box, *last, v) ||
-                     (!(*last == *first) && behind_layer(view, box, *first, v)));
+    if (!last) return false;
+    if (behind_layer(view, box, *last, v)) return true;
+    tree_.traverse_marked(sv.position, centre, [&](const RayStep& s) {
+      if (!stops(s)) return true;
+      first = s.key;
+      return false;
+    });
+    return first && !(*first == *last) && behind_layer(view, box, *first, v);
   }
 
   // Whether two layers of leaf cells next to the cell `at`, across an axis that separates
