@@ -1042,13 +1042,13 @@ Point3 unpack(LatticePoint p, double leaf) {
 }
 
 // The centre (index 0) and the 8 corners of an octant; a leaf has only its centre. With
-// `leaf_centres`, an octant of 2 × 2 × 2 leaves has its leaves' centres instead, in the
-// order of its children (exact octants: what its leaves judged alone say, without a proof).
-// Only corners (9 samples) are shared with other octants.
+// `leaf_centres` (an octant of 2 × 2 × 2 leaves, exact octants: what its leaves judged alone
+// say, without a proof), its leaves' centres instead, in the order of its children. Only
+// corners (9 samples) are shared with other octants.
 int samples_of(const Candidate& c, unsigned leaf_level, bool leaf_centres, LatticePoint out[9]) {
   const std::uint32_t size = 1u << (leaf_level - c.level);  // in leaves
   const std::uint32_t x = 2u * c.key.k[0], y = 2u * c.key.k[1], z = 2u * c.key.k[2];
-  if (leaf_centres && c.level + 1 == leaf_level) {
+  if (leaf_centres) {
     for (int k = 0; k < 8; ++k)  // child index: bit 0 x, bit 1 y, bit 2 z (OctoMap's)
       out[k] = pack_cell_parts(x + ((k & 1) ? 3 : 1), y + ((k & 2) ? 3 : 1), z + ((k & 4) ? 3 : 1));
     return 8;
@@ -1096,11 +1096,6 @@ class OctantProof {
   static std::pair<Eigen::Vector3d, Eigen::Vector3d> relative(const Box& b, const Point3& o) {
     return {{b.lo.x - o.x, b.lo.y - o.y, b.lo.z - o.z}, {b.hi.x - o.x, b.hi.y - o.y, b.hi.z - o.z}};
   }
-  static bool holds_point(const Octant& o, const Point3& p) {
-    const double h = o.size / 2;
-    return p.x >= o.center.x - h && p.x < o.center.x + h && p.y >= o.center.y - h &&
-           p.y < o.center.y + h && p.z >= o.center.z - h && p.z < o.center.z + h;
-  }
   static bool holds_point(const Box& b, const Point3& p) {
     return p.x >= b.lo.x && p.x < b.hi.x && p.y >= b.lo.y && p.y < b.hi.y && p.z >= b.lo.z &&
            p.z < b.hi.z;
@@ -1124,7 +1119,7 @@ class OctantProof {
     if (sv.returns && !sv.returns->may_see_box(lo, hi, leaf_).all) return false;
     return tree_.for_each_marked_in_hull(sv.position, c.key, c.level, [&](const Octant& o) {
       // The scanner's own octant never hides anything (as for one segment).
-      if (o.label() == Label::kOccupied) return holds_point(o, sv.position);
+      if (o.label() == Label::kOccupied) return holds_point(key_box(o.key, o.level), sv.position);
       // Doors and windows: a direct view must cross none (but the door it stands in).
       return best_across(view, o.label(), o.key, o.level) >= v;
     });
@@ -1273,6 +1268,11 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
   const unsigned threads = detail::thread_count(params.threads);
   const unsigned leaf = tree.leaf_level();
   const double leaf_size = tree.leaf_size();
+  // Exact octants: an octant of 2 × 2 × 2 leaves is judged by its leaves' centres (a proof
+  // would cost more than their segments, and fail for a quarter of them).
+  const auto by_leaf_centres = [&](const Candidate& c) {
+    return params.exact_octants && c.level + 1 == leaf;
+  };
   PackedKeyMap<std::uint32_t> index;     // lattice point → sample id
   std::vector<LatticePoint> points;      // by sample id
   std::vector<std::uint8_t> visibility;  // by sample id
@@ -1289,11 +1289,11 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
     samples.resize(9 * todo.size());
     for (std::size_t c = 0; c < todo.size(); ++c) {
       LatticePoint s[9];
-      const int n = samples_of(todo[c], leaf, params.exact_octants, s);
+      const int n = samples_of(todo[c], leaf, by_leaf_centres(todo[c]), s);
       const auto known = std::uint8_t(known_visibility(todo[c].node->label(), params.scope));
-      if (c + 8 < todo.size()) {  // hide the probes' cache misses
+      if (c + 8 < todo.size() && todo[c + 8].level < leaf) {  // hide the probes' cache misses
         LatticePoint ahead[9];
-        if (samples_of(todo[c + 8], leaf, params.exact_octants, ahead) == 9)
+        if (samples_of(todo[c + 8], leaf, by_leaf_centres(todo[c + 8]), ahead) == 9)
           for (const LatticePoint& p : ahead) index.prefetch(p);
       }
       if (n < 9) {  // leaves' centres (odd lattice points) are no other octant's samples
@@ -1367,7 +1367,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
       const auto seen = [&](std::uint32_t sample) { return std::max(known, visibility[sample]); };
       const Label l = label_for(Visibility(seen(id[0])), params.scope);
       bool uniform = true;
-      if (params.exact_octants && o.level + 1 == leaf) {  // its leaves' centres
+      if (by_leaf_centres(o)) {
         for (int i = 1; i < 8 && uniform; ++i)
           uniform = label_for(Visibility(seen(id[i])), params.scope) == l;
       } else if (o.level < leaf) {
@@ -1404,7 +1404,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
       ++report.octants_tested;
       tree.expandNode(o.node);  // partly visible: 8 children with its label
       ++report.octants_split;
-      if (params.exact_octants && o.level + 1 == leaf) {  // its leaves were tested with it
+      if (by_leaf_centres(o)) {  // its leaves were tested with it
         const Visibility known = known_visibility(o.node->label(), params.scope);
         for (unsigned k = 0; k < 8; ++k)
           relabel(
