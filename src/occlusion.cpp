@@ -1,10 +1,12 @@
 #include "semioctree/occlusion.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <optional>
+#include <unordered_map>
 #include <unordered_set>
 #include <utility>
 
@@ -1224,6 +1226,72 @@ class OctantProof {
   double leaf_;
 };
 
+// Keeps in `todo` the candidates that a segment from some view may reach through one of
+// the `changed` octants: those whose hull with a view meets a changed octant's box. In
+// leaf-cell units (cell i spans [i, i + 1)), the changed octants of each coarse voxel as one
+// box, grown by a hair so that a segment along a face counts; a candidate is tested only
+// against the (view, box) pairs its coarse voxel's hull meets.
+void keep_reaching_through(const SemiOcTree& tree, const std::vector<ScannerView>& views,
+                           const std::vector<std::pair<octomap::OcTreeKey, unsigned>>& changed,
+                           std::vector<Candidate>& todo) {
+  struct CellBox {
+    double lo[3], hi[3];
+  };
+  const unsigned leaf = tree.leaf_level();
+  const auto cell_box = [&](const octomap::OcTreeKey& key, unsigned level, double grow) {
+    CellBox b;
+    const double size = double(1u << (leaf - level));
+    for (int i = 0; i < 3; ++i) {
+      b.lo[i] = double(std::int64_t(key.k[i]) - kKeyOrigin) - grow;
+      b.hi[i] = b.lo[i] + size + 2 * grow;
+    }
+    return b;
+  };
+  const auto coarse_of = [&](const octomap::OcTreeKey& key) {
+    return pack_key_parts(key.k[0] >> leaf, key.k[1] >> leaf, key.k[2] >> leaf);
+  };
+  std::unordered_map<std::uint64_t, CellBox> by_coarse;
+  for (const auto& [key, level] : changed) {
+    const CellBox b = cell_box(key, level, 1e-6);
+    const auto [it, added] = by_coarse.emplace(coarse_of(key), b);
+    for (int i = 0; i < 3 && !added; ++i) {
+      it->second.lo[i] = std::min(it->second.lo[i], b.lo[i]);
+      it->second.hi[i] = std::max(it->second.hi[i], b.hi[i]);
+    }
+  }
+  std::vector<CellBox> boxes;
+  for (const auto& entry : by_coarse) boxes.push_back(entry.second);
+  std::vector<std::array<double, 3>> apex;
+  for (const ScannerView& v : views) {
+    const double inv = 1.0 / tree.leaf_size();
+    apex.push_back({v.position.x * inv, v.position.y * inv, v.position.z * inv});
+  }
+  std::uint64_t coarse = ~std::uint64_t(0);
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;  // (view, box) the coarse hull meets
+  std::size_t kept = 0;
+  for (const Candidate& c : todo) {
+    if (coarse_of(c.key) != coarse) {
+      coarse = coarse_of(c.key);
+      octomap::OcTreeKey min_corner;
+      for (int i = 0; i < 3; ++i)
+        min_corner.k[i] = static_cast<octomap::key_type>((c.key.k[i] >> leaf) << leaf);
+      const CellBox voxel = cell_box(min_corner, 0, 0.0);
+      pairs.clear();
+      for (std::size_t v = 0; v < views.size(); ++v)
+        for (std::size_t b = 0; b < boxes.size(); ++b)
+          if (detail::hull_meets_box(apex[v].data(), voxel.lo, voxel.hi, boxes[b].lo, boxes[b].hi))
+            pairs.emplace_back(v, b);
+    }
+    const CellBox octant = cell_box(c.key, c.level, 0.0);
+    for (const auto& [v, b] : pairs)
+      if (detail::hull_meets_box(apex[v].data(), octant.lo, octant.hi, boxes[b].lo, boxes[b].hi)) {
+        todo[kept++] = c;
+        break;
+      }
+  }
+  todo.resize(kept);
+}
+
 }  // namespace
 
 std::vector<ScannerView> scanner_views(
@@ -1264,6 +1332,8 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
     if (candidate(o.label(), params.scope))
       todo.push_back({o.key, o.level, const_cast<SemiOcTreeNode*>(o.node)});
   });
+  if (!params.changed_octants.empty())
+    keep_reaching_through(tree, views, params.changed_octants, todo);
   OcclusionReport report;
   const unsigned threads = detail::thread_count(params.threads);
   const unsigned leaf = tree.leaf_level();

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 #include <unordered_set>
+#include <utility>
+#include <vector>
 
 #include "nbv/label_roles.h"
 #include "scanner_limits.h"
@@ -96,7 +98,8 @@ std::uint64_t pack_octant(const octomap::OcTreeKey& k, unsigned level, Label lab
 
 struct OpeningChange {
   std::size_t dropped = 0;  // earlier opening octants no longer wholly of their label
-  bool added = false;       // an opening leaf now that lay in no earlier opening octant
+  // The opening octants now that lie in no earlier opening octant of their label.
+  std::vector<std::pair<octomap::OcTreeKey, unsigned>> added;
 };
 
 // Compares the map's door and window octants with those it had `before`.
@@ -130,10 +133,7 @@ OpeningChange compare_openings(const SemiOcTree& tree, const std::vector<Labelle
         k[a] = static_cast<octomap::key_type>((o.key[a] >> shift) << shift);
       known = earlier.count(pack_octant(k, level, o.label)) != 0;
     }
-    if (!known) {
-      change.added = true;
-      break;
-    }
+    if (!known) change.added.emplace_back(o.key, o.level);
   }
   return change;
 }
@@ -221,7 +221,7 @@ ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,
   rep.openings_found = openings_.size();
   const OpeningChange change = compare_openings(*tree_, openings_before);
   rep.opening_octants_dropped = change.dropped;
-  rep.opening_leaves_added = change.added && !first;
+  rep.opening_leaves_added = !change.added.empty() && !first;
   rep.seconds_openings = seconds_since(t0);
 
   t0 = Clock::now();
@@ -242,8 +242,10 @@ ScanUpdateReport SurveyMap::add_scan(const Cloud& points, const Point3& scanner,
     rep.retest = study_occlusion(*tree_, {all.back()}, op);
     // Empty space that the earlier positions saw through what is only now
     // an opening lies beyond it: out, unless some position sees it directly.
+    // Only what a segment reaches through the new opening leaves can change.
     if (rep.opening_leaves_added) {
       op.scope = OcclusionScope::kFreeThroughOpenings;
+      op.changed_octants = change.added;
       rep.through_openings = study_occlusion(*tree_, all, op);
     }
   }

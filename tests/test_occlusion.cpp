@@ -455,6 +455,60 @@ TEST(Occlusion, FreeSpaceSeenThroughADoorBecomesOut) {
   EXPECT_EQ(label_at(*again, Point3(3.8, 3.2, 1.0)), Label::kOut);    // out of its range
 }
 
+// A door whose upper part is labelled only later: the study told which leaves changed judges
+// only the octants a segment reaches through them, and every leaf ends as a study of all
+// the free space says.
+TEST(Occlusion, AStudyToldWhatChangedJudgesOnlyWhatIsReachedThroughIt) {
+  const std::vector<ScannerView> views{ScannerView{Point3(1.0, 2.0, 1.2)},
+                                       ScannerView{Point3(0.6, 3.1, 0.7)}};
+  std::unique_ptr<SemiOcTree> maps[2];
+  std::vector<std::pair<octomap::OcTreeKey, unsigned>> upper;
+  for (auto& m : maps) {
+    m = wall_with_door();
+    std::vector<Octant> space;
+    m->for_each_octant([&](const Octant& o) {
+      if (o.label() != Label::kOccupied) space.push_back(o);
+    });
+    for (const Octant& o : space) m->set_label(o.key, o.level, Label::kEmpty);
+    label_door(*m);
+    upper.clear();
+    for (double y = 1.525; y < 2.5; y += 0.05)  // the door's leaves above 1.5 m: not yet a door
+      for (double z = 1.525; z < 2.0; z += 0.05) {
+        octomap::OcTreeKey k;
+        m->key_of({2.025, y, z}, k);
+        m->set_label(k, m->leaf_level(), Label::kEmpty);
+        upper.emplace_back(k, m->leaf_level());
+      }
+    OcclusionParams through;
+    through.scope = OcclusionScope::kFreeThroughOpenings;
+    study_occlusion(*m, views, through);
+    for (const auto& [k, level] : upper) m->set_label(k, level, Label::kDoor);
+  }
+  OcclusionParams all;
+  all.scope = OcclusionScope::kFreeThroughOpenings;
+  OcclusionParams changed = all;
+  changed.changed_octants = upper;
+  const OcclusionReport full = study_occlusion(*maps[0], views, all);
+  const OcclusionReport part = study_occlusion(*maps[1], views, changed);
+  EXPECT_LT(part.octants_tested, full.octants_tested / 2);
+  EXPECT_GT(part.out, 0u);
+  std::size_t leaves = 0, differ = 0;
+  const double r = maps[0]->leaf_size();
+  maps[0]->for_each_octant([&](const Octant& o) {
+    const int n = int(std::lround(o.size / r));
+    const double h = o.size / 2;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j)
+        for (int k = 0; k < n; ++k) {
+          const Point3 p(o.center.x - h + (i + 0.5) * r, o.center.y - h + (j + 0.5) * r,
+                         o.center.z - h + (k + 0.5) * r);
+          ++leaves;
+          differ += label_at(*maps[1], p) != o.label();
+        }
+  });
+  EXPECT_EQ(differ, 0u) << "of " << leaves << " leaves";
+}
+
 // A scan taken in the doorway (as surveyors do to link rooms) stands in the door's
 // leaves or just beyond them: that door is where it stands, not one it looks through,
 // so it sees both sides directly, also along lines that cross the door's leaves
