@@ -29,11 +29,20 @@ struct DirectionBins {
   int per_degree = 1, rows = 180;
   std::vector<int> count, first;
   int total = 0;
+  // Per row edge r (0 … rows): the cosine and sine of row_edge(r); per row: of the azimuth
+  // step 2π / count[r] from one column's edge to the next.
+  std::vector<double> edge_cos, edge_sin, step_cos, step_sin;
   explicit DirectionBins(int k) : per_degree(k), rows(180 * k), count(rows), first(rows) {
     for (int r = 0; r < rows; ++r) {
       count[r] = std::max(1, int(std::lround(360.0 * k * std::cos(row_elevation(r)))));
       first[r] = total;
       total += count[r];
+      step_cos.push_back(std::cos(2 * M_PI / count[r]));
+      step_sin.push_back(std::sin(2 * M_PI / count[r]));
+    }
+    for (int r = 0; r <= rows; ++r) {
+      edge_cos.push_back(std::cos(row_edge(r)));
+      edge_sin.push_back(std::sin(row_edge(r)));
     }
   }
   // A direction as the bins index it: elevation in degrees above −90° (0–180), the
@@ -672,13 +681,14 @@ ReturnDirections::BoxSight ReturnDirections::may_see_box(const Eigen::Vector3d& 
   const double farthest2 = d.farthest * d.farthest, nearest2 = d.nearest * d.nearest;
   for_each_row_of(b, d, [&](int r, int i0, int i1) {
     const double el0 = b.row_edge(r), el1 = b.row_edge(r + 1);
-    const double c0 = std::cos(el0), c1 = std::cos(el1);
+    const double c0 = b.edge_cos[std::size_t(r)], c1 = b.edge_cos[std::size_t(r) + 1];
     const Range cos_el{std::max(0.0, std::min(c0, c1) - kRangeMargin),
                        (el0 <= 0 && el1 >= 0 ? 1.0 : std::max(c0, c1)) + kRangeMargin};
-    const Range uz{std::sin(el0) - kRangeMargin, std::sin(el1) + kRangeMargin};
+    const Range uz{b.edge_sin[std::size_t(r)] - kRangeMargin,
+                   b.edge_sin[std::size_t(r) + 1] + kRangeMargin};
     const int n = b.count[r];
     // Each column's first edge, stepped from column to column by a rotation.
-    const double step = 2 * M_PI / n, step_cos = std::cos(step), step_sin = std::sin(step);
+    const double step_cos = b.step_cos[std::size_t(r)], step_sin = b.step_sin[std::size_t(r)];
     const double first_edge = b.column_edge(r, i0);
     double az_cos = std::cos(first_edge), az_sin = std::sin(first_edge);
     for (int i = i0; i <= i1; ++i) {
@@ -1141,8 +1151,9 @@ class OctantProof {
       return true;
     if (sv.returns && sv.returns->may_see_box(lo, hi, leaf_).none) return true;
     // The layers: where the segment to the centre meets such octants, the last before
-    // the box (a wall behind furniture; walked back from the centre), then the first
-    // (walked from the view). Neither is the scanner's own octant.
+    // the box (a wall behind furniture; walked back from the centre), then, for what is
+    // seen through an opening, the first (walked from the view: the room's wall with the
+    // door). Neither is the scanner's own octant.
     const Point3 centre(0.5 * (box.lo.x + box.hi.x), 0.5 * (box.lo.y + box.hi.y),
                         0.5 * (box.lo.z + box.hi.z));
     const auto stops = [&](const RayStep& s) {
@@ -1157,6 +1168,7 @@ class OctantProof {
     });
     if (!last) return false;
     if (behind_layer(view, box, *last, v)) return true;
+    if (v == Visibility::kHidden) return false;
     tree_.traverse_marked(sv.position, centre, [&](const RayStep& s) {
       if (!stops(s)) return true;
       first = s.key;
