@@ -1033,10 +1033,19 @@ Visibility known_visibility(Label l, OcclusionScope scope) {
   return l == Label::kOut ? Visibility::kThroughOpening : Visibility::kHidden;
 }
 
+// What is proven of every point of an octant (exact octants), from the proofs of the
+// octant it was split from: each point is seen at least `floor`, and the views of bits
+// `settled` (view i < 64: bit i) see none better than `floor`.
+struct ProvenSight {
+  Visibility floor = Visibility::kHidden;
+  std::uint64_t settled = 0;
+};
+
 struct Candidate {
   octomap::OcTreeKey key;
   unsigned level;
   SemiOcTreeNode* node;  // a leaf octant of the tree
+  ProvenSight proven;    // inherited by its children when it is split
 };
 
 // Sample points live on the lattice of half leaves: coordinate u (per axis)
@@ -1083,13 +1092,23 @@ class OctantProof {
       : tree_(tree), views_(views), leaf_(tree.leaf_size()) {}
 
   // Whether every point of `c` is seen `v` by the best of the views, given that its
-  // samples all are and that `known` is a lower bound from its label; `hint` is the
-  // view that sees its centre so.
-  bool holds(const Candidate& c, Visibility v, Visibility known, std::uint32_t hint) const {
+  // samples all are and that `known` (at least c.proven.floor) is a lower bound from its
+  // label and its proven sight; `hint` is the view that sees its centre so. Views settled
+  // in c.proven are not asked again. `proven`: what holds of c as far as the proofs went
+  // (for its children if it is split).
+  bool holds(const Candidate& c, Visibility v, Visibility known, std::uint32_t hint,
+             ProvenSight& proven) const {
+    proven = c.proven;
     if (v > known && !seen_all(views_[hint], c, v)) return false;
+    // Every point is seen at least v: views settled at the floor (≤ v) see none better.
+    proven.floor = v;
     if (v == Visibility::kDirect) return true;
-    for (const ViewLimits& view : views_)
-      if (!seen_at_most(view, c, v)) return false;
+    for (std::size_t i = 0; i < views_.size(); ++i) {
+      const std::uint64_t bit = i < 64 ? std::uint64_t(1) << i : 0;
+      if (proven.settled & bit) continue;
+      if (!seen_at_most(views_[i], c, v)) return false;
+      proven.settled |= bit;
+    }
     return true;
   }
 
@@ -1342,7 +1361,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
   std::vector<Candidate> todo;
   tree.for_each_octant([&](const Octant& o) {
     if (candidate(o.label(), params.scope))
-      todo.push_back({o.key, o.level, const_cast<SemiOcTreeNode*>(o.node)});
+      todo.push_back({o.key, o.level, const_cast<SemiOcTreeNode*>(o.node), {}});
   });
   if (!params.changed_octants.empty())
     keep_reaching_through(tree, views, params.changed_octants, todo);
@@ -1363,6 +1382,13 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
   // know (each takes the better of its own and the sample's, so the sample's visibility
   // need only be found above it); a later candidate that knows less casts it again.
   std::vector<std::uint8_t> known_floor;
+  // By sample id: views known to see it no better than its known floor (a candidate's
+  // settled views, for the samples no other candidate shares).
+  std::vector<std::uint64_t> settled;
+  // What a candidate's label and proven sight say of every point of it.
+  const auto known_of = [&](const Candidate& c) {
+    return std::max(known_visibility(c.node->label(), params.scope), c.proven.floor);
+  };
   const OctantProof proof(tree, limits);
   std::vector<std::uint32_t> samples;  // ids of each candidate's samples, 9 per candidate
   std::vector<std::size_t> segments;
@@ -1372,7 +1398,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
     for (std::size_t c = 0; c < todo.size(); ++c) {
       LatticePoint s[9];
       const int n = samples_of(todo[c], leaf, by_leaf_centres(todo[c]), s);
-      const auto known = std::uint8_t(known_visibility(todo[c].node->label(), params.scope));
+      const auto known = std::uint8_t(known_of(todo[c]));
       if (c + 8 < todo.size() && todo[c + 8].level < leaf) {  // hide the probes' cache misses
         LatticePoint ahead[9];
         if (samples_of(todo[c + 8], leaf, by_leaf_centres(todo[c + 8]), ahead) == 9)
@@ -1383,6 +1409,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
           samples[9 * c + i] = static_cast<std::uint32_t>(points.size());
           points.push_back(s[i]);
           known_floor.push_back(known);
+          settled.push_back(todo[c].proven.settled);
         }
         continue;
       }
@@ -1398,6 +1425,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
         if (*id == next) {
           points.push_back(s[i]);
           known_floor.push_back(known);
+          settled.push_back(0);
         }
         samples[9 * c + i] = *id;
       }
@@ -1416,7 +1444,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
       std::uint64_t may_see[kBatch];
       for (std::size_t i = 0; i < n; ++i) {
         p[i] = unpack(points[begin + i], leaf_size);
-        may_see[i] = ~std::uint64_t(0);
+        may_see[i] = ~settled[begin + i];  // a settled view cannot raise its floor
       }
       double dx[kBatch], dy[kBatch], dz[kBatch];
       std::uint8_t may[kBatch];
@@ -1441,11 +1469,13 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
     // Per candidate: its label, or kSplit.
     constexpr auto kSplit = std::uint8_t(0xff);
     std::vector<std::uint8_t> decision(todo.size());
+    std::vector<ProvenSight> proven(todo.size());  // per candidate split: for its children
     std::vector<std::size_t> unproven(threads, 0);
     detail::parallel_for(todo.size(), threads, 16, [&](std::size_t c, unsigned worker) {
       const Candidate& o = todo[c];
       const std::uint32_t* id = &samples[9 * c];
-      const auto known = std::uint8_t(known_visibility(o.node->label(), params.scope));
+      const auto known = std::uint8_t(known_of(o));
+      proven[c] = o.proven;
       const auto seen = [&](std::uint32_t sample) { return std::max(known, visibility[sample]); };
       const Label l = label_for(Visibility(seen(id[0])), params.scope);
       bool uniform = true;
@@ -1458,7 +1488,8 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
           uniform = params.exact_octants ? seen(id[i]) == seen(id[0])
                                          : label_for(Visibility(seen(id[i])), params.scope) == l;
         if (uniform && params.exact_octants &&
-            !proof.holds(o, Visibility(seen(id[0])), Visibility(known), best_view[id[0]])) {
+            !proof.holds(o, Visibility(seen(id[0])), Visibility(known), best_view[id[0]],
+                         proven[c])) {
           uniform = false;
           ++unproven[worker];
         }
@@ -1487,7 +1518,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
       tree.expandNode(o.node);  // partly visible: 8 children with its label
       ++report.octants_split;
       if (by_leaf_centres(o)) {  // its leaves were tested with it
-        const Visibility known = known_visibility(o.node->label(), params.scope);
+        const Visibility known = known_of(o);
         for (unsigned k = 0; k < 8; ++k)
           relabel(
               tree.getNodeChild(o.node, k),
@@ -1499,7 +1530,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
         octomap::OcTreeKey ck = o.key;
         for (int a = 0; a < 3; ++a)
           if (k & (1u << a)) ck.k[a] = static_cast<octomap::key_type>(ck.k[a] + half);
-        children.push_back({ck, o.level + 1, tree.getNodeChild(o.node, k)});
+        children.push_back({ck, o.level + 1, tree.getNodeChild(o.node, k), proven[c]});
       }
     }
     todo.swap(children);
