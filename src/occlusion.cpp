@@ -1383,8 +1383,14 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
   // need only be found above it); a later candidate that knows less casts it again.
   std::vector<std::uint8_t> known_floor;
   // By sample id: views known to see it no better than its known floor (a candidate's
-  // settled views, for the samples no other candidate shares).
+  // settled views, for the samples no other candidate shares); none past its end (it stays
+  // empty until a sample has some).
   std::vector<std::uint64_t> settled;
+  const auto settle_last_point = [&](std::uint64_t views_settled) {
+    if (views_settled == 0 && settled.empty()) return;
+    settled.resize(points.size() - 1, 0);
+    settled.push_back(views_settled);
+  };
   // What a candidate's label and proven sight say of every point of it.
   const auto known_of = [&](const Candidate& c) {
     return std::max(known_visibility(c.node->label(), params.scope), c.proven.floor);
@@ -1395,6 +1401,8 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
   while (!todo.empty()) {
     const std::size_t first_new = points.size();
     samples.resize(9 * todo.size());
+    points.reserve(first_new + 9 * todo.size());  // (at most 9 new samples a candidate)
+    known_floor.reserve(first_new + 9 * todo.size());
     for (std::size_t c = 0; c < todo.size(); ++c) {
       LatticePoint s[9];
       const int n = samples_of(todo[c], leaf, by_leaf_centres(todo[c]), s);
@@ -1409,7 +1417,7 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
           samples[9 * c + i] = static_cast<std::uint32_t>(points.size());
           points.push_back(s[i]);
           known_floor.push_back(known);
-          settled.push_back(todo[c].proven.settled);
+          settle_last_point(todo[c].proven.settled);
         }
         continue;
       }
@@ -1425,7 +1433,6 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
         if (*id == next) {
           points.push_back(s[i]);
           known_floor.push_back(known);
-          settled.push_back(0);
         }
         samples[9 * c + i] = *id;
       }
@@ -1444,7 +1451,8 @@ OcclusionReport study_occlusion(SemiOcTree& tree, const std::vector<ScannerView>
       std::uint64_t may_see[kBatch];
       for (std::size_t i = 0; i < n; ++i) {
         p[i] = unpack(points[begin + i], leaf_size);
-        may_see[i] = ~settled[begin + i];  // a settled view cannot raise its floor
+        // A settled view cannot raise its floor.
+        may_see[i] = begin + i < settled.size() ? ~settled[begin + i] : ~std::uint64_t(0);
       }
       double dx[kBatch], dy[kBatch], dz[kBatch];
       std::uint8_t may[kBatch];
