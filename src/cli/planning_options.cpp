@@ -69,7 +69,7 @@ void add_planning_options(CLI::App& cmd, PlanningOptions& o) {
          "label its centre and 8 corners agree on (the paper's test; a table leg's shadow "
          "or a slit thinner than the octant can slip between them); exact = only with a "
          "label proven for every point of it, else it is split, so that every leaf gets the "
-         "label it would get alone (about 1.6 times the study's time)")
+         "label it would get alone (about 1.5 times the study's time)")
       ->check(CLI::IsMember({"exact", "sampled"}))
       ->capture_default_str();
   cmd.add_option("--threads", o.threads, "worker threads (0: one per core; at most 256)")
