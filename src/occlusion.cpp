@@ -6,6 +6,8 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <stdexcept>
+#include <string>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
@@ -1283,6 +1285,10 @@ void keep_reaching_through(const SemiOcTree& tree, const std::vector<ScannerView
   };
   std::unordered_map<std::uint64_t, CellBox> by_coarse;
   for (const auto& [key, level] : changed) {
+    if (level > leaf)
+      throw std::invalid_argument("OcclusionParams::changed_octants: level " +
+                                  std::to_string(level) + " is below the leaf level " +
+                                  std::to_string(leaf));
     const CellBox b = cell_box(key, level, 1e-6);
     const auto [it, added] = by_coarse.emplace(coarse_of(key), b);
     for (int i = 0; i < 3 && !added; ++i) {

@@ -11,6 +11,7 @@
 #include <memory>
 #include <random>
 #include <set>
+#include <stdexcept>
 #include <tuple>
 #include <vector>
 
@@ -507,6 +508,9 @@ TEST(Occlusion, AStudyToldWhatChangedJudgesOnlyWhatIsReachedThroughIt) {
         }
   });
   EXPECT_EQ(differ, 0u) << "of " << leaves << " leaves";
+  OcclusionParams finer = changed;  // an octant below the leaf level is no octant of the map
+  finer.changed_octants = {{upper[0].first, maps[0]->leaf_level() + 1}};
+  EXPECT_THROW(study_occlusion(*maps[0], views, finer), std::invalid_argument);
 }
 
 // A scan taken in the doorway (as surveyors do to link rooms) stands in the door's

@@ -263,9 +263,10 @@ struct OcclusionParams {
   // Worker threads (0: one per core); the result is the same for any count.
   unsigned threads = 0;
   // Not empty: only the candidates that a segment from some view may reach through one of
-  // these octants (min-corner key and level) are judged; the others keep their label. For a
-  // study after a change confined to them (door or window leaves labelled since the last
-  // study): what no segment reaches through them is seen as it was.
+  // these octants (min-corner key and level ≤ the leaf level, else std::invalid_argument)
+  // are judged; the others keep their label. For a study after a change confined to them
+  // (door or window leaves labelled since the last study): what no segment reaches through
+  // them is seen as it was.
   std::vector<std::pair<octomap::OcTreeKey, unsigned>> changed_octants;
   // Afterwards merge the siblings left with one label (SemiOcTree::prune):
   // labels and volumes are unchanged, in fewer octants. (The NBV scores count
