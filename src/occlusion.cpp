@@ -1280,17 +1280,18 @@ void keep_reaching_through(const SemiOcTree& tree, const std::vector<ScannerView
     }
     return b;
   };
+  // The min-corner key of the coarse voxel holding `key`.
   const auto coarse_of = [&](const octomap::OcTreeKey& key) {
-    return pack_key_parts(key.k[0] >> leaf, key.k[1] >> leaf, key.k[2] >> leaf);
+    return tree.coarse_key(tree.coarse_index(key));
   };
-  std::unordered_map<std::uint64_t, CellBox> by_coarse;
+  std::unordered_map<std::uint64_t, CellBox> by_coarse;  // by the coarse voxel's packed key
   for (const auto& [key, level] : changed) {
     if (level > leaf)
       throw std::invalid_argument("OcclusionParams::changed_octants: level " +
                                   std::to_string(level) + " is below the leaf level " +
                                   std::to_string(leaf));
     const CellBox b = cell_box(key, level, 1e-6);
-    const auto [it, added] = by_coarse.emplace(coarse_of(key), b);
+    const auto [it, added] = by_coarse.emplace(pack_octant_key(coarse_of(key)), b);
     for (int i = 0; i < 3 && !added; ++i) {
       it->second.lo[i] = std::min(it->second.lo[i], b.lo[i]);
       it->second.hi[i] = std::max(it->second.hi[i], b.hi[i]);
@@ -1299,19 +1300,16 @@ void keep_reaching_through(const SemiOcTree& tree, const std::vector<ScannerView
   std::vector<CellBox> boxes;
   for (const auto& entry : by_coarse) boxes.push_back(entry.second);
   std::vector<std::array<double, 3>> apex;
-  for (const ScannerView& v : views) {
-    const double inv = 1.0 / tree.leaf_size();
+  const double inv = 1.0 / tree.leaf_size();
+  for (const ScannerView& v : views)
     apex.push_back({v.position.x * inv, v.position.y * inv, v.position.z * inv});
-  }
-  std::uint64_t coarse = ~std::uint64_t(0);
+  std::optional<octomap::OcTreeKey> coarse;                // of the last candidate
   std::vector<std::pair<std::size_t, std::size_t>> pairs;  // (view, box) the coarse hull meets
   std::size_t kept = 0;
   for (const Candidate& c : todo) {
-    if (coarse_of(c.key) != coarse) {
-      coarse = coarse_of(c.key);
-      octomap::OcTreeKey min_corner;
-      for (int i = 0; i < 3; ++i)
-        min_corner.k[i] = static_cast<octomap::key_type>((c.key.k[i] >> leaf) << leaf);
+    if (const octomap::OcTreeKey min_corner = coarse_of(c.key);
+        !(coarse && *coarse == min_corner)) {
+      coarse = min_corner;
       const CellBox voxel = cell_box(min_corner, 0, 0.0);
       pairs.clear();
       for (std::size_t v = 0; v < views.size(); ++v)
