@@ -11,9 +11,9 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <map>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "semioctree/scan_io.h"
@@ -455,6 +455,52 @@ int ply_type_size(const std::string& type) {
   return 0;
 }
 
+// PCL's reader gives a vertex's uchar red (or diffuse_red) a 4-byte rgb field
+// where it stands, but writes the colour and moves past it only at blue: the
+// properties read between the two, and all of them after a blue without its
+// red, land at offsets other than their fields' (the last vertex's past the
+// buffer, where PCL asserts). Red, green and blue one after another, once each,
+// keep every field where PCL writes it. A uchar alpha is merged into the
+// colour last read, or, with none read yet but a property named rgb declared,
+// into the vertex's first four bytes (without one PCL skips it). Throws naming
+// the property.
+void check_ply_vertex_colours(const std::string& path,
+                              const std::vector<std::pair<std::string, std::string>>& properties) {
+  auto colour = [](const std::pair<std::string, std::string>& p) {
+    if (p.second != "uchar" && p.second != "uint8") return -1;
+    if (p.first == "alpha") return 3;
+    for (int c = 0; c < 3; ++c) {
+      const std::string name = c == 0 ? "red" : c == 1 ? "green" : "blue";
+      if (p.first == name || p.first == "diffuse_" + name) return c;
+    }
+    return -1;
+  };
+  std::size_t first = properties.size(), seen = 0;
+  bool named_rgb = false;
+  for (std::size_t i = 0; i < properties.size(); ++i) {
+    const int c = colour(properties[i]);
+    named_rgb |= properties[i].first == "rgb";
+    if (c < 0) continue;
+    if (c == 3) {
+      if (seen == 0 && named_rgb)
+        throw ScanReadError(path +
+                            ": PLY vertex property alpha comes before red, green, blue: "
+                            "PCL would merge it into the vertex's first property");
+      continue;
+    }
+    if (first == properties.size()) first = i;
+    ++seen;
+    if (i != first + std::size_t(c))
+      throw ScanReadError(path + ": PLY vertex property " + properties[i].first +
+                          " is out of place: PCL reads uchar colours only as red, green, blue, "
+                          "once each and one after another");
+  }
+  if (seen != 0 && seen != 3)
+    throw ScanReadError(path + ": PLY vertex has " + properties[first].first +
+                        " without all of red, green, blue: PCL reads uchar colours only as the "
+                        "three together");
+}
+
 // PLY: the header's element counts against the file's size, before PCL's
 // reader allocates them (its vertex buffer, its range_grid rows).
 }  // namespace
@@ -475,7 +521,7 @@ void check_ply_file(const std::string& path) {
   };
   std::vector<Element> elements;
   std::string format;
-  std::map<std::string, std::string> vertex_types;  // scalar property -> type
+  std::vector<std::pair<std::string, std::string>> vertex_properties;  // name, type, in order
   // Cloud size as PCL's reader sets it: obj_info num_cols / num_rows, else the vertex count.
   std::uint32_t cols = 0, rows = 0;
   bool obj_info_size = false;
@@ -494,6 +540,11 @@ void check_ply_file(const std::string& path) {
         throw ScanReadError(at + "expected 'element NAME COUNT' with COUNT a non-negative " +
                             "integer, got " + excerpt(h.lines[i]));
       e.name = t[1];
+      // PCL counts the rows of both into one buffer sized for the first.
+      if ((e.name == "vertex" || e.name == "range_grid") &&
+          std::any_of(elements.begin(), elements.end(),
+                      [&](const Element& o) { return o.name == e.name; }))
+        throw ScanReadError(at + "a second " + e.name + " element");
       if (e.name == "vertex") {
         if (e.count == 0)
           throw ScanReadError(path + ": PLY file holds no points (element vertex 0)");
@@ -521,7 +572,11 @@ void check_ply_file(const std::string& path) {
         if (list)
           throw ScanReadError(
               at + "list property in the vertex element is not supported: " + excerpt(h.lines[i]));
-        vertex_types[t[2]] = t[1];
+        const std::string& name = t[2];
+        if (std::any_of(vertex_properties.begin(), vertex_properties.end(),
+                        [&](const auto& p) { return p.first == name; }))
+          throw ScanReadError(at + "vertex property " + name + " is declared twice");
+        vertex_properties.emplace_back(name, t[1]);
       }
     } else if (t[0] == "obj_info" && std::isspace(static_cast<unsigned char>(h.lines[i][0]))) {
       // PCL's reader splits the line at blanks and asserts that its first word is
@@ -539,18 +594,24 @@ void check_ply_file(const std::string& path) {
                                    [](const Element& e) { return e.name == "vertex"; });
   if (vertex == elements.end()) throw ScanReadError(path + ": PLY file has no vertex element");
   for (const char* axis : {"x", "y", "z"}) {
-    const auto it = vertex_types.find(axis);
-    if (it == vertex_types.end()) throw ScanReadError(path + ": PLY vertex has no x, y, z");
+    const auto it = std::find_if(vertex_properties.begin(), vertex_properties.end(),
+                                 [&](const auto& p) { return p.first == axis; });
+    if (it == vertex_properties.end()) throw ScanReadError(path + ": PLY vertex has no x, y, z");
     // PCL fills a property of another type with 0 when converting to PointXYZ.
     if (it->second != "float" && it->second != "float32")
       throw ScanReadError(path + ": PLY vertex property " + axis + " is " + it->second +
                           ", not float");
   }
+  check_ply_vertex_colours(path, vertex_properties);
+  const auto grid = std::find_if(elements.begin(), elements.end(),
+                                 [](const Element& e) { return e.name == "range_grid"; });
+  // Each vertex is one cell's: PCL sizes its buffer by the cells.
+  if (grid != elements.end() && grid->count < vertex->count)
+    throw ScanReadError(path + ": PLY has more vertices (" + std::to_string(vertex->count) +
+                        ") than range_grid cells (" + std::to_string(grid->count) + ")");
   if (obj_info_size) {
     // A range_grid maps the cloud's cells to vertices; without it the cells
     // are the vertices. Any other size makes PCL invent or drop points.
-    const auto grid = std::find_if(elements.begin(), elements.end(),
-                                   [](const Element& e) { return e.name == "range_grid"; });
     const std::uint64_t cells = grid != elements.end() ? grid->count : vertex->count;
     if (std::uint64_t(cols) * rows != cells)
       throw ScanReadError(path + ": PLY obj_info num_cols x num_rows (" + std::to_string(cols) +

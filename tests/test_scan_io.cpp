@@ -3,6 +3,7 @@
 #include <pcl/conversions.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
+#include <pcl/point_types.h>
 
 #include <algorithm>
 #include <chrono>
@@ -495,6 +496,79 @@ TEST(ScanIoHeaders, PclPagePaddingIsNotRowsBeyondPoints) {
   std::fill(bytes.end() - 12, bytes.end(), '\x01');
   std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
   expect_rejected(path, "PCD POINTS is less than the file's data rows");
+  std::filesystem::remove_all(dir);
+}
+
+// PCL's PLY reader writes each vertex property at a running offset, which its
+// uchar red, green, blue, alpha and a second vertex element move apart from the
+// fields' offsets: the coordinates read wrong, or the last vertex is written
+// past the buffer and PCL aborts. Such headers are refused; the layouts PCL
+// writes itself read.
+TEST(ScanIoHeaders, VertexLayoutsPclWouldMisplaceAreRejected) {
+  const auto dir = testing::temp_dir("ply-layout");
+  const std::string head = "ply\nformat ascii 1.0\n";
+  const std::string xyz = "property float x\nproperty float y\nproperty float z\n";
+  const std::string v2 = "element vertex 2\n";
+  const std::string grid = "element range_grid 1\nproperty list uchar int vertex_indices\n";
+  struct Case {
+    const char* name;
+    std::string header;  // between the format line and end_header
+    const char* data;
+    const char* problem;
+  };
+  const Case cases[] = {
+      {"blue.ply", v2 + xyz + "property uchar blue\nproperty double d\n", "1 2 3 4 5\n6 7 8 9 10\n",
+       "PLY vertex property blue is out of place"},
+      {"split.ply",
+       v2 + "property uchar red\n" + xyz + "property uchar green\nproperty uchar blue\n",
+       "9 1 2 3 9 9\n9 4 5 6 9 9\n", "PLY vertex property green is out of place"},
+      {"red.ply", v2 + xyz + "property uchar red\nproperty uchar green\n", "1 2 3 9 9\n4 5 6 9 9\n",
+       "PLY vertex has red without all of red, green, blue"},
+      {"alpha.ply", v2 + xyz + "property float rgb\nproperty uchar alpha\n",
+       "1 2 3 0 255\n4 5 6 0 255\n", "PLY vertex property alpha comes before red, green, blue"},
+      {"twice.ply", v2 + xyz + "property float x\n", "1 2 3 4\n5 6 7 8\n",
+       "PLY header line 7: vertex property x is declared twice"},
+      {"second.ply", v2 + xyz + v2 + xyz, "1 2 3\n4 5 6\n7 8 9\n1 2 3\n",
+       "PLY header line 7: a second vertex element"},
+      {"grids.ply", "element vertex 1\n" + xyz + grid + grid, "1 2 3\n1 0\n1 0\n",
+       "PLY header line 9: a second range_grid element"},
+      {"grid.ply",
+       "obj_info num_cols 1\nobj_info num_rows 1\n" + v2 + xyz + "property double d\n" + grid,
+       "1 2 3 4\n5 6 7 8\n1 0\n", "PLY has more vertices (2) than range_grid cells (1)"},
+  };
+  for (const Case& c : cases)
+    expect_rejected(write_file(dir, c.name, head + c.header + "end_header\n" + c.data), c.problem);
+
+  // Colours as PCL writes them, and by hand with alpha, still read.
+  pcl::PointCloud<pcl::PointXYZRGBA> coloured;
+  for (int i = 0; i < 50; ++i) {
+    pcl::PointXYZRGBA p;
+    p.x = float(i);
+    p.y = -float(i);
+    p.z = 0.5f;
+    p.r = 200;
+    p.g = std::uint8_t(i);
+    p.b = 7;
+    p.a = 255;
+    coloured.push_back(p);
+  }
+  pcl::io::savePLYFileASCII((dir / "pcl-a.ply").string(), coloured);
+  pcl::io::savePLYFileBinary((dir / "pcl-b.ply").string(), coloured);
+  write_file(dir, "hand.ply",
+             head + v2 + xyz +
+                 "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+                 "property uchar alpha\nproperty float w\nend_header\n"
+                 "1 2 3 9 9 9 255 -1\n4 5 6 9 9 9 255 -1\n");
+  for (const std::string name : {"pcl-a.ply", "pcl-b.ply", "hand.ply"}) {
+    SCOPED_TRACE(name);
+    const auto scans = read_scans((dir / name).string());
+    ASSERT_EQ(scans.size(), 1u);
+    const Cloud& c = *scans[0].points;
+    const bool hand = name == "hand.ply";
+    ASSERT_EQ(c.size(), hand ? 2u : 50u);
+    EXPECT_EQ(c.back().getVector3fMap(),
+              hand ? Eigen::Vector3f(4, 5, 6) : Eigen::Vector3f(49, -49, 0.5f));
+  }
   std::filesystem::remove_all(dir);
 }
 
