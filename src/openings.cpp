@@ -312,7 +312,8 @@ DetectedOpening make_opening(const WallGrid& g, const WallFrame& f, const CellRe
 
 // Runs of columns holding points, where gaps up to `max_gap` columns are
 // bridged: a door's lintel keeps its columns non-empty, so only a stretch empty
-// at every height (another wall's corner, a full-height shadow) splits a plane.
+// at every height between the floor's and the ceiling's bands (another wall's
+// corner, a full-height shadow, open space) splits a plane.
 std::vector<std::pair<int, int>> column_runs(const std::vector<std::size_t>& col_points,
                                              int max_gap) {
   std::vector<std::pair<int, int>> runs;
@@ -425,7 +426,7 @@ std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceili
   for (const auto& q : levelled)
     if (std::isfinite(q.x) && q.z >= 0 && q.z < ceiling_height) remaining->push_back(q);
 
-  detail::PlaneSegmentation seg;  // PCL's, counting lanes at a time
+  detail::PlaneSegmentation seg;       // PCL's, counting lanes at a time
   seg.setOptimizeCoefficients(false);  // refitted below on all inliers
   seg.setModelType(pcl::SACMODEL_PARALLEL_PLANE);
   seg.setMethodType(pcl::SAC_RANSAC);
@@ -483,8 +484,18 @@ std::vector<DetectedOpening> detect_openings(const Cloud& levelled, double ceili
       u_max = std::max(u_max, u[k]);
     }
     const int all_cols = int(std::floor((u_max - u_min) / cell)) + 1;
+    // The floor's and the ceiling's cuts leave some of their returns, a few cm
+    // from them, all along the plane: through open space (a hall the plane
+    // crosses, a room beyond the wall's end) they would join stray points in
+    // line with the wall into one segment, whose fill they dilute. Those bands
+    // are what floor_tolerance and min_lintel allow for; points between them
+    // show where the wall stands.
     std::vector<std::size_t> col_points(std::size_t(all_cols), 0);
-    for (double uk : u) ++col_points[std::size_t(std::min(all_cols - 1, int((uk - u_min) / cell)))];
+    for (std::size_t k = 0; k < in.size(); ++k) {
+      const double z = (*remaining)[in[k]].z;
+      if (z >= p.floor_tolerance && z < ceiling_height - p.min_lintel)
+        ++col_points[std::size_t(std::min(all_cols - 1, int((u[k] - u_min) / cell)))];
+    }
 
     for (const auto& [c0, c1] : column_runs(col_points, int(p.wall_split_gap / cell))) {
       WallGrid g;

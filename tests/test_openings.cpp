@@ -217,6 +217,41 @@ TEST(Openings, AGapBetweenWallsInLineIsNoWindowForStrayReturns) {
   EXPECT_NEAR(centre(found[0]).x(), 1.5, 0.05);
 }
 
+// The floor's and the ceiling's cuts leave a few of their returns a couple of centimetres
+// from them, along every plane. Where a wall's plane runs on through open space (the room
+// beyond the wall's end), those bands and a stray face in line with the wall (a cabinet's
+// side 5 m on) once joined it into one segment twice its length, mostly empty: the wall
+// failed min_wall_fill and its door was lost. Only points between the bands show where a
+// wall stands.
+TEST(Openings, FloorAndCeilingBandsDoNotCarryAWallThroughOpenSpace) {
+  std::mt19937 rng(11);
+  const double ceiling = 3.0;
+  Cloud cloud = make_room(4.0, rng, [](const Vec3& p) {
+    return p.x() > 1.0 && p.x() < 2.0 && p.z() < 2.1;  // a door
+  });
+  std::uniform_real_distribution<double> off(-0.01, 0.01);
+  for (double x = 6.05; x < 12.0; x += 0.04)  // the bands beyond the wall's end
+    for (const double z : {0.02, ceiling - 0.02})
+      cloud.push_back(pcl::PointXYZ{float(x), float(off(rng)), float(z + off(rng))});
+  for (double z = 0.01; z < 2.0; z += 0.02)  // a cabinet's side in line with the wall
+    cloud.push_back(pcl::PointXYZ{11.5f, float(off(rng)), float(z)});
+  auto tree = discretize(cloud, ceiling, {0.05, 0.8});
+  const std::vector<Point3> scanners{{3.0, 3.0, 1.5}};
+  OpeningsReport report;
+  const auto found = detect_openings(cloud, ceiling, *tree, scanners, {}, &report);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0].kind, OpeningKind::kDoor);
+  EXPECT_NEAR(centre(found[0]).x(), 1.5, 0.05);
+  // The south wall ends where it stands, at x = 6, not at the cabinet.
+  const auto south =
+      std::find_if(report.walls.begin(), report.walls.end(), [](const DetectedWall& w) {
+        return std::abs(w.normal.y()) > 0.9 && std::abs(w.offset) < 0.1;
+      });
+  ASSERT_NE(south, report.walls.end());
+  const double a = std::abs(south->u_min), b = std::abs(south->u_max);
+  EXPECT_NEAR(std::max(a, b), 6.0, 0.1);
+}
+
 // A scanner confirms only what it could have seen: cells within its range and elevation
 // limits. The room of FindsDoorAndWindowWithTheirSizes: its door (x 1 .. 2, up to 2.1 m)
 // and window (x 3.5 .. 5, z 0.9 .. 2.3) 3 m from the scanner at 1.5 m. Looking down no

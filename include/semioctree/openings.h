@@ -34,7 +34,10 @@ struct OpeningParams {
   int max_planes = 20;                     // planes searched at most
   double min_wall_length = 1.5;            // a wall segment is at least this long, m
   double min_wall_height_fraction = 0.75;  // its points span this share of the room height
-  double wall_split_gap = 0.5;  // columns empty at every height over this length split a plane, m
+  // Columns empty over this length split a plane, m: empty at every height between the
+  // floor's band (floor_tolerance) and the ceiling's (min_lintel), which the cuts of
+  // floor and ceiling leave a few returns in all along the plane.
+  double wall_split_gap = 0.5;
   // Not in the paper: share of a wall segment's grid (floor to ceiling) that
   // must hold points. A vertical plane through scattered furniture (a column,
   // a bench's side, a screen) spans the room's height too, but is mostly
