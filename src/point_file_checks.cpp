@@ -522,6 +522,10 @@ void check_ply_file(const std::string& path) {
   std::vector<Element> elements;
   std::string format;
   std::vector<std::pair<std::string, std::string>> vertex_properties;  // name, type, in order
+  const auto vertex_property = [&](const std::string& name) {
+    return std::find_if(vertex_properties.begin(), vertex_properties.end(),
+                        [&](const auto& p) { return p.first == name; });
+  };
   // Cloud size as PCL's reader sets it: obj_info num_cols / num_rows, else the vertex count.
   std::uint32_t cols = 0, rows = 0;
   bool obj_info_size = false;
@@ -573,8 +577,7 @@ void check_ply_file(const std::string& path) {
           throw ScanReadError(
               at + "list property in the vertex element is not supported: " + excerpt(h.lines[i]));
         const std::string& name = t[2];
-        if (std::any_of(vertex_properties.begin(), vertex_properties.end(),
-                        [&](const auto& p) { return p.first == name; }))
+        if (vertex_property(name) != vertex_properties.end())
           throw ScanReadError(at + "vertex property " + name + " is declared twice");
         vertex_properties.emplace_back(name, t[1]);
       }
@@ -594,8 +597,7 @@ void check_ply_file(const std::string& path) {
                                    [](const Element& e) { return e.name == "vertex"; });
   if (vertex == elements.end()) throw ScanReadError(path + ": PLY file has no vertex element");
   for (const char* axis : {"x", "y", "z"}) {
-    const auto it = std::find_if(vertex_properties.begin(), vertex_properties.end(),
-                                 [&](const auto& p) { return p.first == axis; });
+    const auto it = vertex_property(axis);
     if (it == vertex_properties.end()) throw ScanReadError(path + ": PLY vertex has no x, y, z");
     // PCL fills a property of another type with 0 when converting to PointXYZ.
     if (it->second != "float" && it->second != "float32")
